@@ -1,0 +1,79 @@
+"""The whole experiment as one typed value: what a YAML file holds, section by section."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from flowrun.config.params import (
+    EnvParams,
+    InitialConfig,
+    NetParams,
+    SumoParams,
+    VehicleParams,
+)
+
+
+@dataclass(frozen=True)
+class NetworkConfig:
+    """``network:`` section: the network type plus its ``additional_params`` (flattened in YAML).
+
+    YAML ``network: {type: ring, length: 230}`` is ``NetworkConfig("ring", NetParams({...}))``.
+    """
+
+    type: str = "ring"
+    net_params: NetParams = field(default_factory=NetParams)
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """``train:`` section: stable-baselines3 training.
+
+    Attributes:
+        algorithm: ``PPO``, ``A2C``, ``SAC``, ``TD3``, ``DDPG`` or ``TRPO``.
+        total_timesteps: environment steps to train for (over all envs).
+        n_envs: parallel environments, one subprocess each.
+        seed: training seed; ``None`` uses ``sim.seed``.
+        policy: SB3 policy name.
+        policy_kwargs: passed to the policy (e.g. ``net_arch``).
+        hyperparams: algorithm arguments under SB3's own names (validated against its signature).
+        normalize: wrap the envs in ``VecNormalize``.
+        eval_freq: evaluate every this many environment steps (0 = never during training).
+        eval_episodes: episodes per evaluation and in the final evaluation.
+        checkpoint_freq: save a checkpoint every this many environment steps (0 = never).
+    """
+
+    algorithm: str = "PPO"
+    total_timesteps: int = 100_000
+    n_envs: int = 1
+    seed: int | None = None
+    policy: str = "MlpPolicy"
+    policy_kwargs: dict[str, Any] = field(default_factory=dict)
+    hyperparams: dict[str, Any] = field(default_factory=dict)
+    normalize: bool = False
+    eval_freq: int = 0
+    eval_episodes: int = 1
+    checkpoint_freq: int = 0
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """One experiment: Flow's ``flow_params`` bundle as typed data.
+
+    Attributes:
+        name: experiment name (names the run folder ``runs/<name>/...``).
+        sim: simulation settings.
+        env: environment settings.
+        network: network type and parameters.
+        vehicles: vehicle groups.
+        initial: initial placement.
+        train: training settings, for ``flowrun train``.
+    """
+
+    name: str
+    sim: SumoParams = field(default_factory=SumoParams)
+    env: EnvParams = field(default_factory=EnvParams)
+    network: NetworkConfig = field(default_factory=NetworkConfig)
+    vehicles: VehicleParams = field(default_factory=VehicleParams)
+    initial: InitialConfig = field(default_factory=InitialConfig)
+    train: TrainConfig | None = None

@@ -1,0 +1,46 @@
+"""One error hierarchy for everything a user can get wrong or the simulator can refuse.
+
+Every message says what was expected, what was found, and how to fix it. The CLI turns a
+:class:`FlowrunError` into one line on stderr and exit code 1; anything else is a bug.
+"""
+
+from __future__ import annotations
+
+
+class FlowrunError(Exception):
+    """Base class of all errors flowrun reports to users."""
+
+
+class ConfigError(FlowrunError):
+    """A configuration file or object is invalid.
+
+    Args:
+        message: what is wrong and how to fix it.
+        path: the key path, e.g. ``vehicles[0].acceleration_controller.type``.
+        location: ``file:line`` where the offending value stands, when known.
+    """
+
+    def __init__(self, message: str, path: str = "", location: str = "") -> None:
+        self.message = message
+        self.path = path
+        self.location = location
+        super().__init__(self.render())
+
+    def render(self) -> str:
+        """The one-line message shown to users."""
+        where = self.location
+        if self.path:
+            where = f"{where}: {self.path}" if where else self.path
+        return f"{where}: {self.message}" if where else self.message
+
+
+class SimulationError(FlowrunError):
+    """SUMO refused something or failed (netconvert output, start failure, lost vehicles)."""
+
+
+class RecordingError(FlowrunError):
+    """An MCAP log cannot be written or read."""
+
+
+class TrainingError(FlowrunError):
+    """Training or evaluation cannot proceed (missing extra, bad run directory, ...)."""

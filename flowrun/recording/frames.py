@@ -1,0 +1,89 @@
+"""What one logged step holds: column arrays for every vehicle, plus per-step aggregates.
+
+The kernel fills a :class:`VehicleFrame` from its per-step snapshot; the recorder writes it to
+``/flowrun/vehicles`` and a :class:`StepStats` to ``/flowrun/stats``. Readers return the same
+types, so a log read back compares equal field by field with what the simulation reported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+
+@dataclass(frozen=True)
+class VehicleFrame:
+    """All vehicles at one logged step (each array/list has one entry per vehicle).
+
+    Attributes:
+        step: simulation step index since the episode started (warm-up included).
+        time: simulation time, s.
+        ids: vehicle ids.
+        types: vehicle group names (``idm``, ``rl``, ...).
+        edges: SUMO edge id each vehicle is on.
+        lanes: lane index.
+        lane_pos: position along the lane, m.
+        position: position along the network (ring position for rings), m.
+        odometer: distance travelled since the episode started, m.
+        x: x coordinate, m.
+        y: y coordinate, m.
+        speed: speed, m/s.
+        accel_cmd: commanded acceleration, m/s^2 (``nan`` where SUMO drove the car).
+        accel_real: realised acceleration over the last step, m/s^2.
+        headway: bumper-to-bumper gap to the leader, m (``inf`` when none).
+        leader: leader id (``""`` when none).
+        is_rl: whether the RL agent drives the vehicle.
+    """
+
+    step: int
+    time: float
+    ids: list[str]
+    types: list[str]
+    edges: list[str]
+    lanes: IntArray
+    lane_pos: FloatArray
+    position: FloatArray
+    odometer: FloatArray
+    x: FloatArray
+    y: FloatArray
+    speed: FloatArray
+    accel_cmd: FloatArray
+    accel_real: FloatArray
+    headway: FloatArray
+    leader: list[str]
+    is_rl: BoolArray
+
+
+@dataclass(frozen=True)
+class StepStats:
+    """Aggregates of one logged step.
+
+    Attributes:
+        step: simulation step index.
+        time: simulation time, s.
+        num_vehicles: vehicles in the network.
+        mean_speed: mean speed, m/s.
+        min_speed: minimum speed, m/s.
+        max_speed: maximum speed, m/s.
+        speed_std: standard deviation of speed across vehicles, m/s.
+        reward: reward of the RL step this simulation step belongs to (``nan`` if none).
+        collisions: collisions SUMO reported in this step.
+        teleports: teleports SUMO started in this step.
+    """
+
+    step: int
+    time: float
+    num_vehicles: int
+    mean_speed: float
+    min_speed: float
+    max_speed: float
+    speed_std: float
+    reward: float
+    collisions: int
+    teleports: int
