@@ -1,0 +1,1 @@
+"""The ``flowrun`` command line (the only layer that prints)."""

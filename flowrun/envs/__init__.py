@@ -1,0 +1,20 @@
+"""Environments: Flow's ``Env`` base on Gymnasium and the built-in ring tasks."""
+
+from flowrun.envs.base import Env
+from flowrun.envs.registry import env_names, register_envs, resolve_env_class
+from flowrun.envs.ring.accel import AccelEnv
+from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
+from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
+
+register_envs()
+
+__all__ = [
+    "AccelEnv",
+    "Env",
+    "LaneChangeAccelEnv",
+    "WaveAttenuationEnv",
+    "WaveAttenuationPOEnv",
+    "env_names",
+    "register_envs",
+    "resolve_env_class",
+]

@@ -1,0 +1,266 @@
+"""``Env``: Flow's environment base class, as a Gymnasium environment.
+
+Subclasses define (as in Flow's tutorial) the ``action_space`` and ``observation_space``
+properties, ``_apply_rl_actions(rl_actions)``, ``get_state()`` and
+``compute_reward(rl_actions, **kwargs)``, and optionally ``additional_command()``.
+The base does the bookkeeping: seeded resets to the initial configuration, warm-up steps,
+``sims_per_step``, action clipping, human-driver controllers, collision checks, and
+``terminated`` (collision) vs ``truncated`` (horizon).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import shutil
+import tempfile
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, ClassVar
+
+import gymnasium
+import numpy as np
+
+from flowrun.config.params import EnvParams, SumoParams
+from flowrun.errors import ConfigError
+from flowrun.envs.frames import snapshot_frame, snapshot_stats
+from flowrun.envs.render import render_ring
+from flowrun.envs.vehicles import GroupControl, build_controllers, build_table
+from flowrun.kernel import Kernel
+from flowrun.kernel.sumo import gui_available
+from flowrun.networks.base import Network
+from flowrun.recording.frames import StepStats, VehicleFrame
+
+log = logging.getLogger(__name__)
+
+StepListener = Callable[[VehicleFrame, StepStats], None]
+
+
+def check_additional_params(cls: type, env_params: EnvParams) -> None:
+    """Report every key of ``cls.ADDITIONAL_ENV_PARAMS`` missing from ``env_params``."""
+    declared = getattr(cls, "ADDITIONAL_ENV_PARAMS", {}) or {}
+    missing = [k for k in declared if k not in env_params.additional_params]
+    if missing:
+        raise ConfigError(
+            f"{cls.__name__} needs env.additional_params {', '.join(repr(k) for k in missing)} "
+            f"(declared in its ADDITIONAL_ENV_PARAMS, defaults: "
+            f"{ {k: declared[k] for k in missing} }); add them to the config",
+            path="env.additional_params",
+        )
+
+
+class Env(gymnasium.Env):  # type: ignore[type-arg]
+    """Base class of flowrun environments (Flow's ``flow.envs.Env``).
+
+    Args:
+        env_params: environment settings (horizon, warm-up, additional_params, ...).
+        sim_params: simulation settings (step, seed, render).
+        network: the network with its vehicles and initial placement.
+        simulator: accepted for Flow compatibility (``"traci"``); libsumo always runs
+            headless, sumo-gui over TraCI when ``sim_params.render`` and a display exist.
+        render_mode: ``None`` or ``"rgb_array"`` (a top-down picture of the ring).
+        work_dir: folder for generated SUMO files; a private temporary folder by default.
+
+    Episode: ``reset`` restarts SUMO with the initial configuration (perturbation drawn from
+    the env's seeded generator) and runs ``warmup_steps`` steps without RL actions. Each
+    ``step`` runs ``sims_per_step`` simulation steps. ``terminated`` is true after a
+    collision, ``truncated`` after ``horizon`` steps. ``info`` holds ``mean_speed``,
+    ``collisions``, ``teleports`` and any reward terms in ``reward_terms``.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 10}
+    ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = {}
+
+    def __init__(
+        self,
+        env_params: EnvParams,
+        sim_params: SumoParams,
+        network: Network,
+        simulator: str = "traci",
+        render_mode: str | None = None,
+        work_dir: Path | None = None,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ConfigError(
+                f"render_mode {render_mode!r} is not supported; use None or 'rgb_array'"
+            )
+        check_additional_params(type(self), env_params)
+        self.env_params = env_params
+        self.sim_params = sim_params
+        self.network = network
+        self.scenario = network  # Flow < 0.5 name
+        self.initial_network = network
+        self.initial_vehicles = network.vehicles
+        self.initial_config = network.initial_config
+        self.net_params = network.net_params
+        self.sim_step = sim_params.sim_step
+        self.simulator = simulator
+        self.render_mode = render_mode
+        self._own_dir = work_dir is None
+        self.work_dir = Path(tempfile.mkdtemp(prefix="flowrun-")) if work_dir is None else work_dir
+        gui = bool(sim_params.render) and gui_available()
+        if sim_params.render and not gui:
+            log.warning("render=True but no display or sumo-gui here: running headless")
+        self.k = Kernel(sim_params, self.work_dir, gui=gui)
+        self.controls: list[GroupControl] = build_controllers(network.vehicles)
+        self.step_counter = 0
+        self.time_counter = 0
+        self.record_frames = False
+        self.read_xy = True
+        self.frames: list[tuple[VehicleFrame, StepStats]] = []
+        self.reward_terms: dict[str, float] = {}
+        self._ctrl_rng = np.random.default_rng(0)
+        self._needs_reset = True
+        self._closed = False
+
+    # ------------------------------------------------------------------ Flow's hooks
+    def _apply_rl_actions(self, rl_actions: Any) -> None:
+        """Turn the agent's action into commands (subclasses implement)."""
+        raise NotImplementedError
+
+    def get_state(self) -> Any:
+        """The observation (subclasses implement)."""
+        raise NotImplementedError
+
+    def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
+        """The reward of the last step (subclasses implement)."""
+        return 0.0
+
+    def additional_command(self) -> None:
+        """Anything to do every simulation step besides RL actions (optional)."""
+
+    def episode_network(self) -> Network:
+        """The network of the next episode (override to vary it, e.g. the ring length)."""
+        return self.network
+
+    # ------------------------------------------------------------------ Gymnasium API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        """Restart the simulation in the initial configuration and run the warm-up."""
+        if seed is None and self._np_random is None:
+            seed = int(self.sim_params.seed or 0)
+        super().reset(seed=seed)
+        self.network = self.episode_network()
+        self.scenario = self.network
+        start = self.network.start_positions(self.np_random)
+        table = build_table(self.network.vehicles, self.controls, start)
+        sumo_seed = int(self.np_random.integers(2**31 - 1))
+        self._ctrl_rng = np.random.default_rng(int(self.np_random.integers(2**63 - 1)))
+        self.k.sim_params = _with_seed(self.sim_params, sumo_seed)
+        self.k.reset(self.network, table, read_xy=self.read_xy or self.record_frames)
+        for control in self.controls:
+            control.controller.reset(control.index.size)
+        self.step_counter = 0
+        self.time_counter = 0
+        self.frames = []
+        self._needs_reset = False
+        self._emit_frame(math.nan)
+        for _ in range(self.env_params.warmup_steps):
+            self._simulate(None)
+            if self.k.simulation.check_collision():
+                break
+        self.step_counter = 0
+        obs = self._format_obs(self.get_state())
+        return obs, self._info(crash=False)
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """Apply the action for ``sims_per_step`` simulation steps."""
+        if self._needs_reset:
+            raise gymnasium.error.ResetNeeded("call reset() before step()")
+        self.frames = []
+        crash = False
+        for _ in range(self.env_params.sims_per_step):
+            self._simulate(action)
+            crash = self.k.simulation.check_collision()
+            if crash:
+                break
+        self.step_counter += 1
+        obs = self._format_obs(self.get_state())
+        reward = float(self.compute_reward(action, fail=crash))
+        self.frames = [(f, replace(s, reward=reward)) for f, s in self.frames]
+        terminated = bool(crash)
+        truncated = self.step_counter >= self.env_params.horizon
+        if terminated or truncated:
+            self._needs_reset = True
+        return obs, reward, terminated, truncated, self._info(crash)
+
+    def _simulate(self, action: Any) -> None:
+        """One simulation step: human controllers, RL actions, extra commands, SUMO step."""
+        self.time_counter += 1
+        t = self.k.simulation.time
+        vk = self.k.vehicle
+        for control in self.controls:
+            c = control.controller
+            if c.is_rl or not c.commands_sumo or control.index.size == 0:
+                continue
+            accel = c.get_accel(vk.inputs(control.index, t), self._ctrl_rng)
+            vk.apply_acceleration_idx(control.index, accel)
+        self.apply_rl_actions(action)
+        self.additional_command()
+        self.k.step()
+        self._emit_frame(math.nan)
+
+    def apply_rl_actions(self, rl_actions: Any = None) -> None:
+        """Clip (if asked) and apply the agent's action; ``None`` does nothing."""
+        if rl_actions is None:
+            return
+        self._apply_rl_actions(self.clip_actions(rl_actions))
+
+    def clip_actions(self, rl_actions: Any) -> Any:
+        """Clip a Box action to the action space when ``env_params.clip_actions``."""
+        space = self.action_space
+        if self.env_params.clip_actions and isinstance(space, gymnasium.spaces.Box):
+            return np.clip(np.asarray(rl_actions, dtype=np.float64), space.low, space.high)
+        return rl_actions
+
+    def _format_obs(self, obs: Any) -> Any:
+        space = self.observation_space
+        if isinstance(space, gymnasium.spaces.Box):
+            return np.asarray(obs, dtype=space.dtype).reshape(space.shape)
+        return obs
+
+    def _info(self, crash: bool) -> dict[str, Any]:
+        speed = self.k.vehicle.speed
+        return {
+            "crash": crash,
+            "mean_speed": float(speed.mean()) if speed.size else 0.0,
+            "collisions": self.k.simulation.collisions,
+            "teleports": self.k.simulation.teleports,
+            "time": self.k.simulation.time,
+            "reward_terms": dict(self.reward_terms),
+        }
+
+    def _emit_frame(self, reward: float) -> None:
+        if not self.record_frames:
+            return
+        step = self.k.simulation.step_count
+        self.frames.append(
+            (snapshot_frame(self.k, step), snapshot_stats(self.k, step, reward))
+        )
+
+    def render(self) -> Any:
+        """A top-down RGB picture of the ring (``render_mode="rgb_array"``), else ``None``."""
+        if self.render_mode != "rgb_array" or self._needs_reset and not self.k.started:
+            return None
+        return render_ring(self.k)
+
+    def close(self) -> None:
+        """Stop SUMO and remove the private work folder (safe to call twice)."""
+        if self._closed:
+            return
+        self._closed = True
+        self.k.close()
+        if self._own_dir:
+            shutil.rmtree(self.work_dir, ignore_errors=True)
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except Exception:  # pragma: no cover - interpreter shutdown
+            pass
+
+
+def _with_seed(params: SumoParams, seed: int) -> SumoParams:
+    return replace(params, seed=seed)

@@ -1,0 +1,1 @@
+"""Ring-road environments (Flow's ``flow.envs.ring``)."""

@@ -1,0 +1,81 @@
+"""``AccelEnv``: a central agent sets the acceleration of every RL car; all cars observed."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium.spaces import Box
+
+from flowrun.envs.base import Env
+from flowrun.envs.rewards import desired_velocity
+
+ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
+    # maximum acceleration of the RL cars, m/s^2
+    "max_accel": 3,
+    # maximum deceleration of the RL cars, m/s^2
+    "max_decel": 3,
+    # desired speed of all cars, m/s (the reward's target)
+    "target_velocity": 10,
+    # observe cars sorted by position instead of by id
+    "sort_vehicles": False,
+}
+
+
+class AccelEnv(Env):
+    """Fully observed ring with accelerations for the RL cars (Flow's ``AccelEnv``).
+
+    Observation: ``2 * num_vehicles`` values in [0, 1]: speeds / max speed, then positions /
+    network length, ordered by id (or by position with ``sort_vehicles``).
+    Action: one acceleration per RL car in ``[-max_decel, max_accel]`` m/s^2.
+    Reward: :func:`desired_velocity` towards ``target_velocity`` (mean speed in evaluate mode).
+    Termination: collision; truncation: horizon.
+    """
+
+    ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
+
+    @property
+    def action_space(self) -> Box:  # type: ignore[override]
+        """One acceleration per RL vehicle."""
+        p = self.env_params.additional_params
+        return Box(
+            low=-abs(float(p["max_decel"])),
+            high=float(p["max_accel"]),
+            shape=(self.initial_vehicles.num_rl_vehicles,),
+            dtype=np.float32,
+        )
+
+    @property
+    def observation_space(self) -> Box:  # type: ignore[override]
+        """Normalised speeds and positions of all vehicles."""
+        return Box(low=0.0, high=1.0, shape=(2 * self.initial_vehicles.num_vehicles,), dtype=np.float32)
+
+    def sorted_ids(self) -> list[str]:
+        """Vehicle ids in observation order."""
+        ids = self.k.vehicle.get_ids()
+        if self.env_params.additional_params.get("sort_vehicles"):
+            return sorted(ids, key=self.k.vehicle.get_x_by_id)
+        return ids
+
+    def _apply_rl_actions(self, rl_actions: Any) -> None:
+        rl_ids = self.k.vehicle.get_rl_ids()
+        self.k.vehicle.apply_acceleration(rl_ids, rl_actions)
+
+    def get_state(self) -> Any:
+        """Speeds / max speed and positions / length, in [0, 1]."""
+        ids = self.sorted_ids()
+        speed = np.array(self.k.vehicle.get_speed(ids)) / self.k.network.max_speed()
+        pos = np.array([self.k.vehicle.get_x_by_id(v) for v in ids]) / self.k.network.length()
+        return np.clip(np.concatenate([speed, pos]), 0.0, 1.0)
+
+    def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
+        """Desired-velocity reward (mean speed when ``env_params.evaluate``)."""
+        speeds = self.k.vehicle.speed
+        if self.env_params.evaluate:
+            return float(np.mean(speeds))
+        reward = desired_velocity(
+            speeds, float(self.env_params.additional_params["target_velocity"]),
+            fail=bool(kwargs.get("fail", False)),
+        )
+        self.reward_terms = {"desired_velocity": reward}
+        return reward

@@ -1,0 +1,124 @@
+"""Stabilizing the ring (Wu et al., "Flow", T-RO 2021): one AV dissolves the stop-and-go wave.
+
+At every reset the ring length is redrawn as an integer in ``ring_length`` metres (Flow draws
+``randint(low, high)``), so the policy must work across densities.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium.spaces import Box
+
+from flowrun.envs.base import Env
+from flowrun.envs.rewards import wave_attenuation_terms
+from flowrun.errors import ConfigError
+from flowrun.networks.base import Network
+
+ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
+    # maximum acceleration of the AV, m/s^2
+    "max_accel": 1,
+    # maximum deceleration of the AV, m/s^2
+    "max_decel": 1,
+    # range the ring length is drawn from at each reset, m
+    "ring_length": [220, 270],
+}
+
+V_OBS_SCALE = 15.0  # m/s: speeds in the partial observation are divided by this
+
+
+class WaveAttenuationEnv(Env):
+    """Fully observed ring with a redrawn length (Flow's ``WaveAttenuationEnv``).
+
+    Observation: speeds / max speed and positions / length of all cars (``2 * N`` in [0, 1]).
+    Action: acceleration of each RL car in ``[-max_decel, max_accel]`` m/s^2.
+    Reward: ``4 * mean(v) / 20 - 4 * mean(|a|)`` (terms in ``info["reward_terms"]``);
+    mean speed in evaluate mode; 0 after a collision.
+    """
+
+    ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
+
+    def ring_range(self) -> tuple[int, int]:
+        """``(low, high)`` of the ring length draw, m."""
+        low, high = self.env_params.additional_params["ring_length"]
+        if not 0 < low <= high:
+            raise ConfigError(
+                f"ring_length must be [low, high] with 0 < low <= high, got {[low, high]}",
+                path="env.additional_params.ring_length",
+            )
+        return int(low), int(high)
+
+    def episode_network(self) -> Network:
+        """The ring with a length drawn uniformly from the integers in ``ring_length``."""
+        low, high = self.ring_range()
+        length = int(self.np_random.integers(low, high + 1))
+        return self.initial_network.with_params(length=length)
+
+    @property
+    def action_space(self) -> Box:  # type: ignore[override]
+        """One acceleration per RL vehicle."""
+        p = self.env_params.additional_params
+        return Box(
+            low=-abs(float(p["max_decel"])),
+            high=float(p["max_accel"]),
+            shape=(self.initial_vehicles.num_rl_vehicles,),
+            dtype=np.float32,
+        )
+
+    @property
+    def observation_space(self) -> Box:  # type: ignore[override]
+        """Normalised speeds and positions of all vehicles."""
+        n = self.initial_vehicles.num_vehicles
+        return Box(low=0.0, high=1.0, shape=(2 * n,), dtype=np.float32)
+
+    def _apply_rl_actions(self, rl_actions: Any) -> None:
+        self.k.vehicle.apply_acceleration(self.k.vehicle.get_rl_ids(), rl_actions)
+
+    def get_state(self) -> Any:
+        """Speeds / max speed and positions / length of all cars, by id."""
+        vk = self.k.vehicle
+        speed = vk.speed / self.k.network.max_speed()
+        pos = vk.position / self.k.network.length()
+        return np.clip(np.concatenate([speed, pos]), 0.0, 1.0)
+
+    def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
+        """Speed reward minus acceleration penalty (mean speed when evaluating)."""
+        speeds = self.k.vehicle.speed
+        if self.env_params.evaluate:
+            return float(np.mean(speeds))
+        actions = None if rl_actions is None else np.asarray(rl_actions, dtype=np.float64)
+        self.reward_terms = wave_attenuation_terms(speeds, actions, bool(kwargs.get("fail")))
+        return float(sum(self.reward_terms.values()))
+
+
+class WaveAttenuationPOEnv(WaveAttenuationEnv):
+    """Partially observed ring (Flow's ``WaveAttenuationPOEnv``): the AV sees itself and its leader.
+
+    Observation (3 values): AV speed / 15, (leader speed - AV speed) / 15, and the gap to the
+    leader's front bumper ``(x_lead - x_av) mod L`` divided by the largest ring length.
+    Action, reward, termination: as :class:`WaveAttenuationEnv` (one RL car expected).
+    """
+
+    @property
+    def observation_space(self) -> Box:  # type: ignore[override]
+        """Three unbounded values (see the class docstring)."""
+        return Box(low=-np.inf, high=np.inf, shape=(3,), dtype=np.float32)
+
+    def get_state(self) -> Any:
+        """AV speed, relative leader speed and distance, normalised."""
+        vk = self.k.vehicle
+        rl_ids = vk.get_rl_ids()
+        if not rl_ids:
+            return np.zeros(3)
+        rl = rl_ids[0]
+        lead = vk.get_leader(rl) or rl
+        max_length = float(self.ring_range()[1])
+        gap = (vk.get_x_by_id(lead) - vk.get_x_by_id(rl)) % self.k.network.length()
+        return np.array(
+            [
+                vk.get_speed(rl) / V_OBS_SCALE,
+                (vk.get_speed(lead) - vk.get_speed(rl)) / V_OBS_SCALE,
+                gap / max_length,
+            ]
+        )

@@ -1,0 +1,87 @@
+"""The vehicle population of an episode, and the pure geometry of who follows whom."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+
+@dataclass(frozen=True)
+class VehicleTable:
+    """Static facts about every vehicle of an episode, in placement order.
+
+    Attributes:
+        ids: vehicle ids (``{group}_{i}``).
+        types: group name of each vehicle.
+        group: index of each vehicle's group in ``VehicleParams.groups``.
+        is_rl: driven by the RL agent.
+        commanded: a flowrun (non-SUMO, non-RL) controller sets its acceleration.
+        continuous: routed by ``ContinuousRouter``.
+        lengths: vehicle length, m.
+        max_speeds: vehicle-type maximum speed, m/s.
+        start_edges: edge each vehicle enters on.
+        start_lane_pos: entry position on that edge, m.
+        start_lanes: entry lane.
+        initial_speeds: entry speed, m/s.
+        speed_modes: SUMO speedMode of each vehicle.
+        lane_change_modes: SUMO laneChangeMode of each vehicle.
+    """
+
+    ids: list[str]
+    types: list[str]
+    group: IntArray
+    is_rl: BoolArray
+    commanded: BoolArray
+    continuous: BoolArray
+    lengths: FloatArray
+    max_speeds: FloatArray
+    start_edges: list[str]
+    start_lane_pos: list[float]
+    start_lanes: list[int]
+    initial_speeds: list[float]
+    speed_modes: list[int]
+    lane_change_modes: list[int]
+
+    @property
+    def size(self) -> int:
+        """Number of vehicles."""
+        return len(self.ids)
+
+
+def leaders_on_ring(
+    position: FloatArray, lanes: IntArray, lengths: FloatArray, ring_length: float
+) -> tuple[IntArray, IntArray, FloatArray]:
+    """Leader, follower and bumper-to-bumper headway of every car on a closed ring.
+
+    Cars are sorted by position within each lane; each car's leader is the next one ahead
+    (wrapping around the ring). A car alone in its lane has no leader (index -1, headway inf).
+
+    Args:
+        position: front-bumper position along the ring, m.
+        lanes: lane index of each car.
+        lengths: car lengths, m.
+        ring_length: circumference, m.
+
+    Returns:
+        leader index, follower index (-1 for none) and headway (m) of every car.
+    """
+    n = position.shape[0]
+    leader = np.full(n, -1, dtype=np.int64)
+    follower = np.full(n, -1, dtype=np.int64)
+    headway = np.full(n, np.inf)
+    for lane in np.unique(lanes):
+        idx = np.flatnonzero(lanes == lane)
+        if idx.size < 2:
+            continue
+        idx = idx[np.argsort(position[idx], kind="stable")]
+        ahead = np.roll(idx, -1)
+        leader[idx] = ahead
+        follower[ahead] = idx
+        headway[idx] = np.mod(position[ahead] - position[idx], ring_length) - lengths[ahead]
+    return leader, follower, headway

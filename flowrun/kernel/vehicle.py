@@ -1,0 +1,302 @@
+"""Vehicle state, read once per step into arrays, and the commands sent back to SUMO.
+
+Every getter serves the snapshot taken by :meth:`VehicleKernel.update`; none of them calls
+SUMO. Commands (:meth:`apply_acceleration`, ...) are buffered and sent in :meth:`send_commands`
+just before the simulation step.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from typing import Any, overload
+
+import numpy as np
+
+from flowrun.controllers.base import CarFollowingInputs
+from flowrun.kernel.snapshot import VehicleTable, leaders_on_ring
+from flowrun.networks.base import NetworkSpec
+
+
+class VehicleKernel:
+    """Flow's ``k.vehicle``: per-step vehicle state and commands.
+
+    Args:
+        table: the fixed vehicle population of the episode (ids, groups, lengths, ...).
+        spec: the network the vehicles drive on.
+        dt: simulation step, s.
+    """
+
+    def __init__(self, table: VehicleTable, spec: NetworkSpec, dt: float) -> None:
+        self.table = table
+        self.spec = spec
+        self.dt = dt
+        self.api: Any = None
+        self.read_xy = True
+        n = table.size
+        self._index = {vid: i for i, vid in enumerate(table.ids)}
+        self.edges: list[str] = [""] * n
+        self.lanes = np.zeros(n, dtype=np.int64)
+        self.lane_pos = np.zeros(n)
+        self.position = np.zeros(n)
+        self.speed = np.zeros(n)
+        self.prev_speed = np.zeros(n)
+        self.accel_real = np.zeros(n)
+        self.accel_cmd = np.full(n, np.nan)
+        self.last_cmd = np.full(n, np.nan)
+        self.headway = np.full(n, np.inf)
+        self.leader = np.full(n, -1, dtype=np.int64)
+        self.follower = np.full(n, -1, dtype=np.int64)
+        self.odometer = np.zeros(n)
+        self.x = np.zeros(n)
+        self.y = np.zeros(n)
+        self.speed_limit = np.full(n, np.inf)
+        self._lane_change: dict[int, int] = {}
+        self._routes: dict[int, list[str]] = {}
+        self._route_last = [""] * n
+        self._edge_speed = {e.id: e.speed for e in spec.edges}
+        self._multi_lane = any(e.lanes > 1 for e in spec.edges)
+
+    # ------------------------------------------------------------------ reading
+    def attach(self, api: Any) -> None:
+        """Bind to a freshly started simulation (``libsumo`` or ``traci`` module)."""
+        self.api = api
+        self._route_last = [self.spec.routes[e][-1] if e in self.spec.routes else "" for e in
+                            self.table.start_edges]
+
+    def update(self, first: bool = False) -> None:
+        """Read every vehicle's state from SUMO (one pass of plain getters) into the arrays."""
+        v = self.api.vehicle
+        ids = self.table.ids
+        self.prev_speed = self.speed
+        edges = [v.getRoadID(i) for i in ids]
+        lane_pos = np.array([v.getLanePosition(i) for i in ids], dtype=np.float64)
+        speed = np.array([v.getSpeed(i) for i in ids], dtype=np.float64)
+        if self._multi_lane:
+            self.lanes = np.array([v.getLaneIndex(i) for i in ids], dtype=np.int64)
+        if self.read_xy:
+            xy = np.array([v.getPosition(i) for i in ids], dtype=np.float64).reshape(-1, 2)
+            self.x, self.y = xy[:, 0], xy[:, 1]
+        starts = self.spec.edge_starts
+        position = np.array([starts.get(e, math.nan) for e in edges]) + lane_pos
+        if first:
+            self.prev_speed = speed
+            self.odometer = np.zeros(len(ids))
+        else:
+            moved = position - self.position
+            if self.spec.closed:
+                moved = np.mod(moved, self.spec.length)
+            self.odometer = self.odometer + np.nan_to_num(moved)
+        self._reroute(edges)
+        self.edges, self.lane_pos, self.speed, self.position = edges, lane_pos, speed, position
+        self.accel_real = (speed - self.prev_speed) / self.dt
+        self.speed_limit = np.array([self._edge_speed.get(e, math.inf) for e in edges])
+        if self.spec.closed:
+            self.leader, self.follower, self.headway = leaders_on_ring(
+                position, self.lanes, self.table.lengths, self.spec.length
+            )
+
+    def _reroute(self, edges: list[str]) -> None:
+        """ContinuousRouter: a car that reaches its route's last edge gets the next loop."""
+        if not self.table.continuous.any():
+            return
+        for i in np.flatnonzero(self.table.continuous):
+            edge = edges[i]
+            if edge == self._route_last[i] and edge in self.spec.routes:
+                route = self.spec.routes[edge]
+                self.api.vehicle.setRoute(self.table.ids[i], list(route))
+                self._route_last[i] = route[-1]
+
+    # ------------------------------------------------------------------ commands
+    def apply_acceleration(self, veh_ids: str | Sequence[str], acc: Any) -> None:
+        """Command accelerations (m/s^2): next-step speed will be ``v + a*dt`` (Flow's rule)."""
+        if isinstance(veh_ids, str):
+            veh_ids = [veh_ids]
+        accs = np.broadcast_to(np.asarray(acc, dtype=np.float64).reshape(-1), (len(veh_ids),))
+        for vid, a in zip(veh_ids, accs, strict=True):
+            self.accel_cmd[self._index[vid]] = a
+
+    def apply_acceleration_idx(self, idx: np.ndarray, acc: np.ndarray) -> None:
+        """Command accelerations by vehicle index (the vectorised path controllers use)."""
+        self.accel_cmd[idx] = acc
+
+    def apply_lane_change(self, veh_ids: str | Sequence[str], direction: Any) -> None:
+        """Change lane: ``+1`` left, ``-1`` right, ``0`` stay (Flow's convention)."""
+        if isinstance(veh_ids, str):
+            veh_ids = [veh_ids]
+        dirs = np.broadcast_to(np.asarray(direction).reshape(-1), (len(veh_ids),))
+        for vid, d in zip(veh_ids, dirs, strict=True):
+            if int(round(float(d))) != 0:
+                self._lane_change[self._index[vid]] = int(np.sign(d))
+
+    def choose_routes(self, veh_ids: str | Sequence[str], route_choices: Any) -> None:
+        """Give vehicles new routes (lists of edge ids); ``None`` keeps the current one."""
+        if isinstance(veh_ids, str):
+            veh_ids, route_choices = [veh_ids], [route_choices]
+        for vid, route in zip(veh_ids, route_choices, strict=True):
+            if route is not None:
+                self._routes[self._index[vid]] = list(route)
+
+    def send_commands(self) -> None:
+        """Send the buffered commands to SUMO and clear them."""
+        v = self.api.vehicle
+        ids = self.table.ids
+        cmd = self.accel_cmd
+        todo = np.flatnonzero(np.isfinite(cmd))
+        if todo.size:
+            target = np.maximum(self.speed[todo] + cmd[todo] * self.dt, 0.0)
+            for i, s in zip(todo.tolist(), target.tolist(), strict=True):
+                v.slowDown(ids[i], s, 1e-3)
+        for i, d in self._lane_change.items():
+            lanes = self._num_lanes(self.edges[i])
+            target_lane = min(max(int(self.lanes[i]) + d, 0), lanes - 1)
+            if target_lane != self.lanes[i]:
+                v.changeLane(ids[i], target_lane, 100000.0)
+        for i, route in self._routes.items():
+            v.setRoute(ids[i], route)
+            self._route_last[i] = route[-1]
+        self.last_cmd = cmd
+        self.accel_cmd = np.full(self.table.size, np.nan)
+        self._lane_change = {}
+        self._routes = {}
+
+    def _num_lanes(self, edge: str) -> int:
+        for e in self.spec.edges:
+            if e.id == edge:
+                return e.lanes
+        return 1
+
+    # ------------------------------------------------------------------ controller inputs
+    def inputs(self, idx: np.ndarray, time: float) -> CarFollowingInputs:
+        """The state a car-following controller needs, for the vehicles ``idx``."""
+        lead = self.leader[idx]
+        fol = self.follower[idx]
+        speed = self.speed[idx]
+        has_lead = lead >= 0
+        has_fol = fol >= 0
+        leader_speed = np.where(has_lead, self.speed[np.maximum(lead, 0)], speed)
+        follower_speed = np.where(has_fol, self.speed[np.maximum(fol, 0)], speed)
+        follower_headway = np.where(has_fol, self.headway[np.maximum(fol, 0)], np.inf)
+        return CarFollowingInputs(
+            speed=speed,
+            headway=self.headway[idx],
+            leader_speed=leader_speed,
+            follower_headway=follower_headway,
+            follower_speed=follower_speed,
+            speed_limit=self.speed_limit[idx],
+            dt=self.dt,
+            time=time,
+        )
+
+    # ------------------------------------------------------------------ Flow's getters
+    @property
+    def num_vehicles(self) -> int:
+        """Number of vehicles in the network."""
+        return self.table.size
+
+    @property
+    def num_rl_vehicles(self) -> int:
+        """Number of RL vehicles in the network."""
+        return int(self.table.is_rl.sum())
+
+    def get_ids(self) -> list[str]:
+        """All vehicle ids, in placement order."""
+        return list(self.table.ids)
+
+    def get_rl_ids(self) -> list[str]:
+        """Ids of the vehicles the RL agent drives."""
+        return [vid for vid, rl in zip(self.table.ids, self.table.is_rl, strict=True) if rl]
+
+    def get_human_ids(self) -> list[str]:
+        """Ids of all vehicles the agent does not drive."""
+        return [vid for vid, rl in zip(self.table.ids, self.table.is_rl, strict=True) if not rl]
+
+    def get_controlled_ids(self) -> list[str]:
+        """Ids of human vehicles whose acceleration a flowrun controller sets."""
+        return [self.table.ids[i] for i in np.flatnonzero(self.table.commanded)]
+
+    def get_ids_by_edge(self, edges: str | Iterable[str]) -> list[str]:
+        """Ids of the vehicles on the given edge(s)."""
+        wanted = {edges} if isinstance(edges, str) else set(edges)
+        return [vid for vid, e in zip(self.table.ids, self.edges, strict=True) if e in wanted]
+
+    def get_type(self, veh_id: str) -> str:
+        """The vehicle's group name."""
+        return self.table.types[self._index[veh_id]]
+
+    @overload
+    def get_speed(self, veh_id: str, error: float = ...) -> float: ...
+    @overload
+    def get_speed(self, veh_id: Sequence[str], error: float = ...) -> list[float]: ...
+    def get_speed(self, veh_id: str | Sequence[str], error: float = -1001) -> Any:
+        """Speed in m/s (a list for a list of ids)."""
+        return self._get(self.speed, veh_id)
+
+    def get_x_by_id(self, veh_id: str) -> float:
+        """Position along the network (ring position), m."""
+        return float(self.position[self._index[veh_id]])
+
+    def get_position(self, veh_id: str | Sequence[str]) -> Any:
+        """Position on the current lane, m."""
+        return self._get(self.lane_pos, veh_id)
+
+    def get_2d_position(self, veh_id: str) -> tuple[float, float]:
+        """(x, y) coordinates, m."""
+        i = self._index[veh_id]
+        return float(self.x[i]), float(self.y[i])
+
+    def get_edge(self, veh_id: str | Sequence[str]) -> Any:
+        """Edge id."""
+        if isinstance(veh_id, str):
+            return self.edges[self._index[veh_id]]
+        return [self.edges[self._index[v]] for v in veh_id]
+
+    def get_lane(self, veh_id: str | Sequence[str]) -> Any:
+        """Lane index."""
+        if isinstance(veh_id, str):
+            return int(self.lanes[self._index[veh_id]])
+        return [int(self.lanes[self._index[v]]) for v in veh_id]
+
+    def get_headway(self, veh_id: str | Sequence[str]) -> Any:
+        """Bumper-to-bumper gap to the leader, m (``inf`` without leader)."""
+        return self._get(self.headway, veh_id)
+
+    def get_leader(self, veh_id: str) -> str | None:
+        """Id of the vehicle ahead in the same lane, or ``None``."""
+        j = int(self.leader[self._index[veh_id]])
+        return self.table.ids[j] if j >= 0 else None
+
+    def get_follower(self, veh_id: str) -> str | None:
+        """Id of the vehicle behind in the same lane, or ``None``."""
+        j = int(self.follower[self._index[veh_id]])
+        return self.table.ids[j] if j >= 0 else None
+
+    def get_length(self, veh_id: str) -> float:
+        """Vehicle length, m."""
+        return float(self.table.lengths[self._index[veh_id]])
+
+    def get_distance(self, veh_id: str) -> float:
+        """Distance travelled since the episode started, m."""
+        return float(self.odometer[self._index[veh_id]])
+
+    def get_realized_accel(self, veh_id: str) -> float:
+        """Acceleration realised over the last step, m/s^2."""
+        return float(self.accel_real[self._index[veh_id]])
+
+    def get_accel(self, veh_id: str) -> float | None:
+        """Acceleration commanded for the last step, m/s^2 (``None`` when SUMO drove)."""
+        a = float(self.last_cmd[self._index[veh_id]])
+        return a if math.isfinite(a) else None
+
+    def get_max_speed(self, veh_id: str) -> float:
+        """The vehicle type's maximum speed, m/s."""
+        return float(self.table.max_speeds[self._index[veh_id]])
+
+    def get_route(self, veh_id: str) -> tuple[str, ...]:
+        """The route assigned to the vehicle's current edge."""
+        return self.spec.routes.get(self.get_edge(veh_id), ())
+
+    def _get(self, array: np.ndarray, veh_id: str | Sequence[str]) -> Any:
+        if isinstance(veh_id, str):
+            return float(array[self._index[veh_id]])
+        return [float(array[self._index[v]]) for v in veh_id]

@@ -1,0 +1,167 @@
+"""Networks as data: nodes, edges and routes that ``build.py`` turns into a SUMO ``.net.xml``.
+
+A :class:`Network` is Flow's network object (``name, vehicles, net_params, initial_config``):
+subclasses describe their road as a :class:`NetworkSpec` and say where vehicles start.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from flowrun.config.params import (
+    InitialConfig,
+    NetParams,
+    TrafficLightParams,
+    VehicleParams,
+)
+from flowrun.errors import ConfigError
+from flowrun.suggest import did_you_mean
+
+
+@dataclass(frozen=True)
+class Node:
+    """A junction: id and coordinates in metres."""
+
+    id: str
+    x: float
+    y: float
+    type: str = "priority"
+
+
+@dataclass(frozen=True)
+class Edge:
+    """A road from one node to another.
+
+    Attributes:
+        id: edge id.
+        from_node: start node id.
+        to_node: end node id.
+        length: length in metres (forced, so positions add up exactly).
+        lanes: number of lanes.
+        speed: speed limit, m/s.
+        shape: polyline (x, y) points, metres.
+    """
+
+    id: str
+    from_node: str
+    to_node: str
+    length: float
+    lanes: int
+    speed: float
+    shape: tuple[tuple[float, float], ...] = ()
+
+
+@dataclass(frozen=True)
+class NetworkSpec:
+    """Everything SUMO needs to build the road, plus flowrun's own coordinates.
+
+    Attributes:
+        nodes: junctions.
+        edges: roads, in driving order for closed networks.
+        routes: route id -> edge ids; vehicles starting on edge ``e`` use route ``e``.
+        edge_starts: edge id -> position of the edge's start along the network, metres.
+        length: total length of the network along its edges, metres.
+        closed: ``True`` for a ring (positions wrap at ``length``).
+    """
+
+    nodes: tuple[Node, ...]
+    edges: tuple[Edge, ...]
+    routes: dict[str, tuple[str, ...]]
+    edge_starts: dict[str, float]
+    length: float
+    closed: bool = False
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class StartPositions:
+    """Where each vehicle enters: parallel lists in ``VehicleParams.ids`` order.
+
+    Attributes:
+        edges: edge id of each vehicle.
+        lane_pos: position on that edge, metres (front bumper).
+        lanes: lane index.
+    """
+
+    edges: list[str]
+    lane_pos: list[float]
+    lanes: list[int]
+
+
+class Network:
+    """Base of all networks (Flow's ``Network``/``Scenario``).
+
+    Args:
+        name: experiment name.
+        vehicles: the vehicles to place.
+        net_params: ``additional_params`` of the network type (see ``ADDITIONAL_NET_PARAMS``).
+        initial_config: initial placement.
+        traffic_lights: traffic lights (unused by the ring).
+    """
+
+    ADDITIONAL_NET_PARAMS: ClassVar[dict[str, Any]] = {}
+    network_type: ClassVar[str] = ""
+
+    def __init__(
+        self,
+        name: str,
+        vehicles: VehicleParams,
+        net_params: NetParams,
+        initial_config: InitialConfig | None = None,
+        traffic_lights: TrafficLightParams | None = None,
+    ) -> None:
+        self.name = name
+        self.orig_name = name
+        self.vehicles = vehicles
+        self.net_params = net_params
+        self.initial_config = initial_config or InitialConfig()
+        self.traffic_lights = traffic_lights or TrafficLightParams()
+        self.params = self.resolve_params(net_params.additional_params)
+        self.spec = self.build_spec()
+
+    @classmethod
+    def resolve_params(cls, given: dict[str, Any]) -> dict[str, Any]:
+        """``ADDITIONAL_NET_PARAMS`` overlaid with ``given``; unknown keys are errors."""
+        params = dict(cls.ADDITIONAL_NET_PARAMS)
+        for key, value in given.items():
+            if key not in params:
+                raise ConfigError(
+                    f"unknown parameter of network '{cls.network_type}'"
+                    f"{did_you_mean(key, params)}; expected: {', '.join(params)}",
+                    path=key,
+                )
+            params[key] = value
+        return params
+
+    def with_params(self, **changes: Any) -> Network:
+        """The same network with some ``additional_params`` changed (e.g. a new ring length)."""
+        params = dict(self.net_params.additional_params)
+        params.update(changes)
+        return type(self)(
+            self.name,
+            self.vehicles,
+            NetParams(
+                additional_params=params,
+                inflows=self.net_params.inflows,
+                template=self.net_params.template,
+                osm_path=self.net_params.osm_path,
+            ),
+            self.initial_config,
+            self.traffic_lights,
+        )
+
+    def build_spec(self) -> NetworkSpec:
+        """Describe the road; subclasses implement."""
+        raise NotImplementedError
+
+    def start_positions(self, rng: np.random.Generator) -> StartPositions:
+        """Initial position of every vehicle; subclasses implement."""
+        raise NotImplementedError
+
+    @property
+    def length(self) -> float:
+        """Total length along the edges, metres."""
+        return self.spec.length

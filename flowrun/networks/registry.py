@@ -1,0 +1,45 @@
+"""Network types by name (``network.type`` in a config)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from flowrun.config.params import InitialConfig, VehicleParams
+from flowrun.errors import ConfigError
+from flowrun.networks.base import Network
+from flowrun.networks.ring import RingNetwork, check_ring_fits
+from flowrun.suggest import unknown_name
+
+NETWORKS: dict[str, type[Network]] = {"ring": RingNetwork}
+_ALIASES = {"loop": "ring", "RingNetwork": "ring", "LoopScenario": "ring"}
+
+
+def network_names() -> list[str]:
+    """Names a config may use as ``network.type``."""
+    return sorted(NETWORKS)
+
+
+def network_class(name: str) -> type[Network]:
+    """The network class registered as ``name``.
+
+    Raises:
+        ConfigError: unknown name (with did-you-mean).
+    """
+    key = _ALIASES.get(name, name)
+    if key not in NETWORKS:
+        raise ConfigError(unknown_name("network type", name, NETWORKS), path="type")
+    return NETWORKS[key]
+
+
+def validate_network(
+    network_type: str, params: dict[str, Any], vehicles: VehicleParams, initial: InitialConfig
+) -> None:
+    """Check a network section before anything is built.
+
+    Raises:
+        ConfigError: with ``path`` relative to the network section (``type``, ``length``, ...).
+    """
+    cls = network_class(network_type)
+    resolved = cls.resolve_params(params)
+    if cls is RingNetwork:
+        check_ring_fits(resolved, vehicles, initial)

@@ -1,0 +1,1 @@
+"""Flow's old name for networks: ``flowrun.scenarios.loop.LoopScenario`` is the ring."""
