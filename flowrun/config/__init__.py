@@ -31,3 +31,8 @@ __all__ = [
     "VehicleParams",
     "VehicleType",
 ]
+
+from flowrun.config.dump import config_to_dict, dump_config
+from flowrun.config.loader import config_from_dict, load_config
+
+__all__ += ["config_from_dict", "config_to_dict", "dump_config", "load_config"]

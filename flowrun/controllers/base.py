@@ -4,16 +4,24 @@ A controller object drives one *group* of vehicles (one ``VehicleParams.add`` ca
 step the kernel hands it a :class:`CarFollowingInputs` with one entry per vehicle of the group
 (always in the same order) and gets back one acceleration per vehicle, in m/s^2. Nothing here
 knows about SUMO or the environment, so every formula is testable with plain numbers.
+
+A controller that gives no command (:class:`~flowrun.controllers.rl.RLController`,
+:class:`~flowrun.controllers.rl.SimCarFollowingController`) returns ``nan`` for every vehicle;
+its class attributes ``is_rl`` / ``commands_sumo`` say so up front.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
+
+from flowrun.controllers._checks import number
+from flowrun.controllers.fail_safe import apply_fail_safes, check_fail_safe
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -32,6 +40,11 @@ class CarFollowingInputs:
         speed_limit: speed limit of the ego's lane, m/s.
         dt: simulation step, s.
         time: simulation time, s.
+        max_accel: the vehicle type's maximum acceleration (SUMO ``accel``), m/s^2, or
+            ``None`` when unknown. Used by controllers that Flow caps or that fall back to
+            "full throttle" without a leader, and by the ``feasible_accel`` fail-safe.
+        max_decel: the vehicle type's maximum deceleration (SUMO ``decel``, positive), m/s^2,
+            or ``None`` when unknown.
     """
 
     speed: FloatArray
@@ -42,43 +55,123 @@ class CarFollowingInputs:
     speed_limit: FloatArray
     dt: float
     time: float = 0.0
+    max_accel: FloatArray | None = None
+    max_decel: FloatArray | None = None
 
     @property
     def size(self) -> int:
         """Number of vehicles."""
         return int(self.speed.shape[0])
 
+    @property
+    def has_leader(self) -> npt.NDArray[np.bool_]:
+        """Whether each vehicle has a leader (finite headway)."""
+        return np.isfinite(self.headway)
+
+
+#: SUMO's default ``accel`` of a passenger car, m/s^2 (Flow's ``SumoCarFollowingParams``).
+DEFAULT_MAX_ACCEL = 2.6
+
+
+def make_inputs(
+    speed: Sequence[float] | FloatArray,
+    headway: Sequence[float] | FloatArray,
+    leader_speed: Sequence[float] | FloatArray | None = None,
+    *,
+    follower_headway: Sequence[float] | FloatArray | None = None,
+    follower_speed: Sequence[float] | FloatArray | None = None,
+    speed_limit: float | Sequence[float] | FloatArray = 30.0,
+    dt: float = 0.1,
+    time: float = 0.0,
+    max_accel: float | Sequence[float] | FloatArray | None = None,
+    max_decel: float | Sequence[float] | FloatArray | None = None,
+) -> CarFollowingInputs:
+    """Build :class:`CarFollowingInputs` from lists, filling the contract's defaults.
+
+    Missing leader speeds (or those of vehicles without a leader) become the ego speed;
+    a missing follower gives ``inf`` headway and the ego speed. Scalars broadcast.
+    """
+    v = np.asarray(speed, dtype=np.float64).reshape(-1)
+    n = v.shape[0]
+
+    def arr(x: float | Sequence[float] | FloatArray, name: str) -> FloatArray:
+        try:
+            return np.broadcast_to(np.asarray(x, dtype=np.float64), (n,)).copy()
+        except ValueError as exc:
+            raise ValueError(f"{name} must have {n} entries (one per vehicle)") from exc
+
+    h = arr(headway, "headway")
+    vl = v.copy() if leader_speed is None else arr(leader_speed, "leader_speed")
+    vl = np.where(np.isfinite(h), vl, v)
+    fh = np.full(n, np.inf) if follower_headway is None else arr(follower_headway, "fh")
+    fv = v.copy() if follower_speed is None else arr(follower_speed, "follower_speed")
+    fv = np.where(np.isfinite(fh), fv, v)
+    return CarFollowingInputs(
+        speed=v,
+        headway=h,
+        leader_speed=vl,
+        follower_headway=fh,
+        follower_speed=fv,
+        speed_limit=arr(speed_limit, "speed_limit"),
+        dt=float(dt),
+        time=float(time),
+        max_accel=None if max_accel is None else arr(max_accel, "max_accel"),
+        max_decel=None if max_decel is None else arr(max_decel, "max_decel"),
+    )
+
 
 class AccelerationController:
     """Base of all acceleration controllers.
 
     Subclasses implement :meth:`_accel` (the formula). :meth:`get_accel` adds Flow's Gaussian
-    acceleration noise, ``sqrt(dt) * N(0, noise)``, drawn from the generator it is given.
+    acceleration noise, ``sqrt(dt) * N(0, noise)``, drawn from the generator it is given, then
+    runs the requested fail-safes (see :mod:`flowrun.controllers.fail_safe`).
+
+    Args:
+        noise: standard deviation of the acceleration noise, m/s^2 per sqrt(s).
+        fail_safe: Flow's fail-safe name(s): ``instantaneous``, ``safe_velocity``,
+            ``feasible_accel``, ``obey_speed_limit`` (or a list of them), or ``None``.
+        time_delay: reaction delay used by the ``safe_velocity`` fail-safe, s.
 
     Attributes:
         registered_name: the name configs use (``type: IDM``).
         commands_sumo: ``False`` for controllers that leave the car to SUMO's own model.
         is_rl: ``True`` for the RL agent's placeholder.
+        stateful: ``True`` when the controller keeps per-vehicle memory between steps.
     """
 
     registered_name: ClassVar[str] = ""
     aliases: ClassVar[tuple[str, ...]] = ()
     commands_sumo: ClassVar[bool] = True
     is_rl: ClassVar[bool] = False
+    stateful: ClassVar[bool] = False
 
-    def __init__(self, noise: float = 0.0) -> None:
-        if noise < 0 or not math.isfinite(noise):
-            raise ValueError(f"noise must be a finite number >= 0, got {noise}")
-        self.noise = float(noise)
+    def __init__(
+        self,
+        noise: float = 0.0,
+        fail_safe: str | Sequence[str] | None = None,
+        time_delay: float = 0.0,
+    ) -> None:
+        me = type(self).__name__
+        self.noise = number(me, "noise", noise, low=0)
+        self.fail_safe: tuple[str, ...] = check_fail_safe(fail_safe)
+        self.time_delay = number(me, "time_delay", time_delay, low=0)
 
     def reset(self, num_vehicles: int) -> None:
         """Forget any per-vehicle memory; called at every environment reset."""
 
     def get_accel(self, inputs: CarFollowingInputs, rng: np.random.Generator) -> FloatArray:
-        """Accelerations (m/s^2) for every vehicle of the group, noise included."""
-        accel = self._accel(inputs)
+        """Accelerations (m/s^2) for every vehicle of the group, noise included.
+
+        ``nan`` entries mean "no command this step" (leave the vehicle to SUMO / the agent).
+        """
+        accel = np.asarray(self._accel(inputs), dtype=np.float64)
+        if self.is_rl or not self.commands_sumo:
+            return accel
         if self.noise > 0:
             accel = accel + math.sqrt(inputs.dt) * rng.normal(0.0, self.noise, inputs.size)
+        if self.fail_safe:
+            accel = apply_fail_safes(self.fail_safe, accel, inputs, self.time_delay)
         return accel
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:

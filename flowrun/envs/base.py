@@ -107,12 +107,15 @@ class Env(gymnasium.Env):  # type: ignore[type-arg]
         self.step_counter = 0
         self.time_counter = 0
         self.record_frames = False
-        self.read_xy = True
-        self.frames: list[tuple[VehicleFrame, StepStats]] = []
+        self.read_xy = False
+        self.collect_stats = False
+        self.frames: list[tuple[VehicleFrame | None, StepStats]] = []
         self.reward_terms: dict[str, float] = {}
         self._ctrl_rng = np.random.default_rng(0)
         self._needs_reset = True
         self._closed = False
+        self._step_start = 0
+        self._space_cache: tuple[gymnasium.Space[Any], gymnasium.Space[Any]] | None = None
 
     # ------------------------------------------------------------------ Flow's hooks
     def _apply_rl_actions(self, rl_actions: Any) -> None:
@@ -162,6 +165,7 @@ class Env(gymnasium.Env):  # type: ignore[type-arg]
             if self.k.simulation.check_collision():
                 break
         self.step_counter = 0
+        self._step_start = self.k.simulation.step_count
         obs = self._format_obs(self.get_state())
         return obs, self._info(crash=False)
 
@@ -169,7 +173,6 @@ class Env(gymnasium.Env):  # type: ignore[type-arg]
         """Apply the action for ``sims_per_step`` simulation steps."""
         if self._needs_reset:
             raise gymnasium.error.ResetNeeded("call reset() before step()")
-        self.frames = []
         crash = False
         for _ in range(self.env_params.sims_per_step):
             self._simulate(action)
@@ -179,7 +182,11 @@ class Env(gymnasium.Env):  # type: ignore[type-arg]
         self.step_counter += 1
         obs = self._format_obs(self.get_state())
         reward = float(self.compute_reward(action, fail=crash))
-        self.frames = [(f, replace(s, reward=reward)) for f, s in self.frames]
+        self.frames = [
+            (f, replace(s, reward=reward) if s.step > self._step_start else s)
+            for f, s in self.frames
+        ]
+        self._step_start = self.k.simulation.step_count
         terminated = bool(crash)
         truncated = self.step_counter >= self.env_params.horizon
         if terminated or truncated:
@@ -208,15 +215,22 @@ class Env(gymnasium.Env):  # type: ignore[type-arg]
             return
         self._apply_rl_actions(self.clip_actions(rl_actions))
 
+    def _spaces(self) -> tuple[gymnasium.Space[Any], gymnasium.Space[Any]]:
+        # Subclasses build spaces in properties (Flow's style); they depend only on the
+        # initial vehicles, so build them once instead of on every step.
+        if self._space_cache is None:
+            self._space_cache = (self.action_space, self.observation_space)
+        return self._space_cache
+
     def clip_actions(self, rl_actions: Any) -> Any:
         """Clip a Box action to the action space when ``env_params.clip_actions``."""
-        space = self.action_space
+        space = self._spaces()[0]
         if self.env_params.clip_actions and isinstance(space, gymnasium.spaces.Box):
             return np.clip(np.asarray(rl_actions, dtype=np.float64), space.low, space.high)
         return rl_actions
 
     def _format_obs(self, obs: Any) -> Any:
-        space = self.observation_space
+        space = self._spaces()[1]
         if isinstance(space, gymnasium.spaces.Box):
             return np.asarray(obs, dtype=space.dtype).reshape(space.shape)
         return obs
@@ -233,12 +247,11 @@ class Env(gymnasium.Env):  # type: ignore[type-arg]
         }
 
     def _emit_frame(self, reward: float) -> None:
-        if not self.record_frames:
+        if not (self.record_frames or self.collect_stats):
             return
         step = self.k.simulation.step_count
-        self.frames.append(
-            (snapshot_frame(self.k, step), snapshot_stats(self.k, step, reward))
-        )
+        frame = snapshot_frame(self.k, step) if self.record_frames else None
+        self.frames.append((frame, snapshot_stats(self.k, step, reward)))
 
     def render(self) -> Any:
         """A top-down RGB picture of the ring (``render_mode="rgb_array"``), else ``None``."""

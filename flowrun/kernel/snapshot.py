@@ -75,12 +75,13 @@ def leaders_on_ring(
     leader = np.full(n, -1, dtype=np.int64)
     follower = np.full(n, -1, dtype=np.int64)
     headway = np.full(n, np.inf)
-    for lane in np.unique(lanes):
-        idx = np.flatnonzero(lanes == lane)
+    single_lane = n == 0 or lanes.min() == lanes.max()
+    for lane in (lanes[:1] if single_lane else np.unique(lanes)):
+        idx = np.arange(n) if single_lane else np.flatnonzero(lanes == lane)
         if idx.size < 2:
             continue
         idx = idx[np.argsort(position[idx], kind="stable")]
-        ahead = np.roll(idx, -1)
+        ahead = np.concatenate((idx[1:], idx[:1]))
         leader[idx] = ahead
         follower[ahead] = idx
         headway[idx] = np.mod(position[ahead] - position[idx], ring_length) - lengths[ahead]

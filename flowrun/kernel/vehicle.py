@@ -42,7 +42,8 @@ class VehicleKernel:
         self.speed = np.zeros(n)
         self.prev_speed = np.zeros(n)
         self.accel_real = np.zeros(n)
-        self.accel_cmd = np.full(n, np.nan)
+        self._no_cmd = np.full(n, np.nan)
+        self.accel_cmd = self._no_cmd.copy()
         self.last_cmd = np.full(n, np.nan)
         self.headway = np.full(n, np.inf)
         self.leader = np.full(n, -1, dtype=np.int64)
@@ -86,11 +87,12 @@ class VehicleKernel:
             moved = position - self.position
             if self.spec.closed:
                 moved = np.mod(moved, self.spec.length)
-            self.odometer = self.odometer + np.nan_to_num(moved)
+            self.odometer = self.odometer + np.where(np.isfinite(moved), moved, 0.0)
         self._reroute(edges)
         self.edges, self.lane_pos, self.speed, self.position = edges, lane_pos, speed, position
         self.accel_real = (speed - self.prev_speed) / self.dt
-        self.speed_limit = np.array([self._edge_speed.get(e, math.inf) for e in edges])
+        if edges != self.edges:
+            self.speed_limit = np.array([self._edge_speed.get(e, math.inf) for e in edges])
         if self.spec.closed:
             self.leader, self.follower, self.headway = leaders_on_ring(
                 position, self.lanes, self.table.lengths, self.spec.length
@@ -156,7 +158,7 @@ class VehicleKernel:
             v.setRoute(ids[i], route)
             self._route_last[i] = route[-1]
         self.last_cmd = cmd
-        self.accel_cmd = np.full(self.table.size, np.nan)
+        self.accel_cmd = self._no_cmd.copy()
         self._lane_change = {}
         self._routes = {}
 
@@ -243,6 +245,9 @@ class VehicleKernel:
     def get_2d_position(self, veh_id: str) -> tuple[float, float]:
         """(x, y) coordinates, m."""
         i = self._index[veh_id]
+        if not self.read_xy:
+            x, y = self.api.vehicle.getPosition(veh_id)
+            return float(x), float(y)
         return float(self.x[i]), float(self.y[i])
 
     def get_edge(self, veh_id: str | Sequence[str]) -> Any:

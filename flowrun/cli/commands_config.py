@@ -1,0 +1,63 @@
+"""``flowrun validate`` and ``flowrun list``: check a config; show the names a config may use."""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from flowrun.cli.common import guarded
+from flowrun.config import dump_config, load_config
+from flowrun.errors import ConfigError
+from flowrun.suggest import unknown_name
+
+# ``flowrun list WHAT`` -> (module, function returning the names); imported only when asked.
+LISTS: dict[str, tuple[str, str]] = {
+    "envs": ("flowrun.envs.registry", "env_names"),
+    "networks": ("flowrun.networks.registry", "network_names"),
+    "controllers": ("flowrun.controllers.registry", "controller_names"),
+}
+
+
+def list_names(what: str) -> list[str]:
+    """The names a config may use for ``what`` (``envs``, ``networks`` or ``controllers``).
+
+    Raises:
+        ConfigError: ``what`` is not one of those (with a did-you-mean).
+    """
+    if what not in LISTS:
+        raise ConfigError(unknown_name("list", what, LISTS))
+    module, function = LISTS[what]
+    return [str(name) for name in getattr(importlib.import_module(module), function)()]
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``validate`` and ``list`` commands to ``app``."""
+
+    @app.command("validate")
+    @guarded
+    def validate(
+        config: Annotated[Path, typer.Argument(help="Experiment config (YAML).")],
+        overrides: Annotated[
+            list[str] | None,
+            typer.Option(
+                "--set",
+                help="Override a key, e.g. --set sim.step=0.5 --set vehicles[0].count=10 "
+                "(value read as YAML).",
+            ),
+        ] = None,
+    ) -> None:
+        """Load and validate CONFIG, then print the resolved config (every setting) as YAML."""
+        cfg = load_config(config, overrides or ())
+        typer.echo(dump_config(cfg), nl=False)
+
+    @app.command("list")
+    @guarded
+    def list_(
+        what: Annotated[str, typer.Argument(help="envs, networks or controllers.")],
+    ) -> None:
+        """List the environment, network or controller names a config may use."""
+        for name in list_names(what):
+            typer.echo(name)

@@ -1,0 +1,108 @@
+"""``flowrun baseline`` (and the shared options of commands that run simulations)."""
+
+from __future__ import annotations
+
+import signal
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from flowrun.cli.common import guarded
+
+console = Console()
+
+ConfigArg = Annotated[Path, typer.Argument(help="Experiment YAML file.", show_default=False)]
+SetOpt = Annotated[
+    list[str] | None,
+    typer.Option("--set", help="Override a config value: a.b=value (YAML scalar). Repeatable."),
+]
+SeedOpt = Annotated[int | None, typer.Option("--seed", help="Seed (overrides sim.seed).")]
+OutOpt = Annotated[Path, typer.Option("--out", help="Folder for run folders.")]
+
+
+def overrides_with_seed(sets: list[str] | None, seed: int | None) -> list[str]:
+    """``--set`` values plus ``--seed`` as the override ``sim.seed=S``."""
+    items = list(sets or [])
+    if seed is not None:
+        items.append(f"sim.seed={seed}")
+    return items
+
+
+@contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """Treat SIGTERM like Ctrl-C so ``finally`` blocks finish the logs."""
+
+    def handler(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def metrics_table(title: str, rows: list[Any]) -> Table:
+    """The closing table: one row per run."""
+    table = Table(title=title)
+    for col in ("run", "mean speed", "last-half mean", "speed std", "min speed", "return",
+                "collisions", "teleports"):
+        table.add_column(col, justify="right")
+    for m in rows:
+        table.add_row(
+            str(m.run), f"{m.mean_speed:.3f} m/s", f"{m.last_half_mean_speed:.3f} m/s",
+            f"{m.speed_std:.3f} m/s", f"{m.min_speed:.3f} m/s", f"{m.episode_return:.2f}",
+            str(m.collisions), str(m.teleports),
+        )
+    return table
+
+
+@guarded
+def baseline(
+    config: ConfigArg,
+    runs: Annotated[int, typer.Option("--runs", help="Number of runs.")] = 1,
+    steps: Annotated[int | None, typer.Option("--steps", help="Steps per run (default: env.horizon).")] = None,
+    seed: SeedOpt = None,
+    set_: SetOpt = None,
+    out: OutOpt = Path("runs"),
+    no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
+    record_every: Annotated[int, typer.Option("--record-every", help="Log every N-th step.")] = 1,
+    render: Annotated[bool, typer.Option("--render", help="Write run 0 as an animated GIF.")] = False,
+) -> None:
+    """Run a non-RL experiment: N runs of the config's environment, a table, MCAP logs."""
+    from flowrun.config.loader import load_config
+    from flowrun.experiment.baseline import resolve_steps, run_baseline
+
+    cfg = load_config(config, overrides_with_seed(set_, seed))
+    total = resolve_steps(cfg, steps)
+    columns = (TextColumn("run {task.fields[run]}"), BarColumn(), MofNCompleteColumn(),
+               TimeRemainingColumn())
+    with Progress(*columns, console=console, transient=True, disable=not sys.stderr.isatty()) as bar:
+        task = bar.add_task("baseline", total=total * runs, run=0)
+
+        def progress(run: int, step: int) -> None:
+            bar.update(task, completed=run * total + step, run=run)
+
+        with sigterm_as_interrupt():
+            try:
+                result = run_baseline(
+                    cfg, runs=runs, steps=steps, out=out, record=not no_record,
+                    record_every=record_every, render=render, argv=sys.argv, progress=progress,
+                )
+            except KeyboardInterrupt:
+                console.print("[yellow]interrupted[/]: logs finished; metrics.json says so")
+                raise typer.Exit(code=130) from None
+    console.print(metrics_table(f"{cfg.name}: {runs} run(s) x {total} steps", result.metrics))
+    console.print(f"run folder: {result.run_dir}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the simulation commands to the app."""
+    app.command("baseline")(baseline)

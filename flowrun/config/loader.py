@@ -1,0 +1,213 @@
+"""Load an experiment config: YAML file (+ ``--set`` overrides) -> validated ``ExperimentConfig``.
+
+Checks run in this order and the first problem raises one :class:`ConfigError` carrying the
+key path and ``file:line``: YAML syntax and duplicate keys, then each section's keys, types and
+values, then what spans sections (unique vehicle group ids, controller names and parameters,
+inflow vehicle types, network-specific limits). The environment class is resolved when the
+environment is made (config sits below ``flowrun.envs`` and does not import it).
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import re
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from flowrun.config.convert import Converter
+from flowrun.config.model import ExperimentConfig
+from flowrun.config.overrides import apply_overrides, parse_key
+from flowrun.config.params import VehicleType
+from flowrun.config.yamlio import KeyPath, Locations, parse_yaml
+from flowrun.errors import ConfigError
+from flowrun.suggest import did_you_mean
+
+# Controller fields of a vehicle group and the controller kind each one takes.
+_CONTROLLER_FIELDS = {
+    "acceleration_controller": "acceleration",
+    "lane_change_controller": "lane_change",
+    "routing_controller": "routing",
+}
+_SECTIONS = "name, sim, env, network, vehicles, initial, train"
+
+
+def load_config(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> ExperimentConfig:
+    """Read, override and validate one experiment config file.
+
+    Args:
+        path: the YAML file. Without a ``name:`` key the file's stem names the experiment.
+        overrides: ``key.path=value`` strings (``sim.step=0.5``, ``vehicles[0].count=10``);
+            each value is read as YAML. Later overrides win.
+
+    Returns:
+        The validated config.
+
+    Raises:
+        ConfigError: the first problem found, with its key path and ``file:line``.
+    """
+    file = Path(path)
+    source = str(path)
+    if file.is_dir():
+        raise ConfigError("is a directory; expected a YAML config file", "", source)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(
+            f"config file not found (looked for {file.absolute()}); check the path", "", source
+        ) from None
+    except UnicodeDecodeError:
+        raise ConfigError("not a UTF-8 text file; expected a YAML config", "", source) from None
+    except OSError as err:
+        raise ConfigError(f"cannot read the config file: {err.strerror}", "", source) from None
+    data, locations = parse_yaml(text, source)
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise locations.error(
+            f"expected a mapping with the sections {_SECTIONS}; got a {type(data).__name__}", ()
+        )
+    if "name" not in data:
+        data = {"name": file.stem, **data}
+    apply_overrides(data, overrides, locations)
+    return _build(data, locations)
+
+
+def config_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> ExperimentConfig:
+    """Validate plain data (a parsed YAML document) into an :class:`ExperimentConfig`.
+
+    Args:
+        data: mapping of sections, as in the YAML file.
+        source: name used as the location of errors.
+
+    Raises:
+        ConfigError: the first problem found, with its key path.
+    """
+    locations = Locations(source)
+    if not isinstance(data, Mapping):
+        raise locations.error(f"expected a mapping with the sections {_SECTIONS}", ())
+    return _build(dict(data), locations)
+
+
+def _build(data: dict[str, Any], loc: Locations) -> ExperimentConfig:
+    cfg: ExperimentConfig = Converter(loc).section(ExperimentConfig, data, ())
+    _check_group_ids(cfg, data, loc)
+    _check_controllers(cfg, data, loc)
+    _check_inflows(cfg, loc)
+    _check_network(cfg, loc)
+    return cfg
+
+
+def _given_key(raw: Any, cls: type, field_name: str) -> str:
+    """The spelling of a field used in ``raw`` (its YAML key or the field name)."""
+    aliases = [k for k, v in getattr(cls, "YAML_KEYS", {}).items() if v == field_name]
+    for key in (*aliases, field_name):
+        if isinstance(raw, Mapping) and key in raw:
+            return str(key)
+    return aliases[0] if aliases else field_name
+
+
+def _raw_group(data: Mapping[str, Any], i: int) -> Any:
+    groups = data.get("vehicles")
+    return groups[i] if isinstance(groups, list) and i < len(groups) else None
+
+
+def _check_group_ids(cfg: ExperimentConfig, data: Mapping[str, Any], loc: Locations) -> None:
+    first: dict[str, int] = {}
+    for i, group in enumerate(cfg.vehicles.groups):
+        if group.veh_id in first:
+            key = _given_key(_raw_group(data, i), VehicleType, "veh_id")
+            other = first[group.veh_id]
+            raise loc.error(
+                f"duplicate vehicle group id '{group.veh_id}' (also vehicles[{other}]);"
+                " give each group its own id",
+                ("vehicles", i, key),
+            )
+        first[group.veh_id] = i
+
+
+def _optional(module: str, attr: str) -> Callable[..., Any] | None:
+    """``module.attr``, or ``None`` while that module is not written yet."""
+    try:
+        mod = importlib.import_module(module)
+    except ModuleNotFoundError as err:
+        if err.name and module.startswith(err.name):
+            return None
+        raise
+    found = getattr(mod, attr, None)
+    return found if callable(found) else None
+
+
+def _sub_path(path: str) -> KeyPath:
+    """A path reported by another module's ConfigError, as key-path parts."""
+    if not path:
+        return ()
+    try:
+        return parse_key(path)
+    except ConfigError:
+        return (path,)
+
+
+def _check_controllers(cfg: ExperimentConfig, data: Mapping[str, Any], loc: Locations) -> None:
+    resolve = _optional("flowrun.controllers.registry", "resolve_controller")
+    build = _optional("flowrun.controllers.registry", "build_controller")
+    for i, group in enumerate(cfg.vehicles.groups):
+        raw = _raw_group(data, i)
+        for name, kind in _CONTROLLER_FIELDS.items():
+            spec = getattr(group, name)
+            if spec is None:
+                continue
+            at: KeyPath = ("vehicles", i, name)
+            given = raw.get(name) if isinstance(raw, Mapping) else None
+            try:
+                if resolve is not None:
+                    resolve(spec.type, kind)
+            except ConfigError as err:
+                type_at = (*at, "type") if isinstance(given, Mapping) else at
+                raise loc.error(err.message, type_at) from None
+            try:
+                if build is not None:
+                    build(spec.type, dict(spec.params), kind)
+            except ConfigError as err:
+                raise loc.error(err.message, (*at, *_param_path(err, spec.params))) from None
+
+
+def _param_path(err: ConfigError, params: Mapping[str, Any]) -> KeyPath:
+    """The parameter a controller's error is about: its ``path``, else the first one it names."""
+    if err.path:
+        return _sub_path(err.path)
+    for pattern in ("'{}'", r"\b{}\b"):
+        found = [
+            (m.start(), key)
+            for key in params
+            if (m := re.search(pattern.format(re.escape(str(key))), err.message))
+        ]
+        if found:
+            return (min(found)[1],)
+    return ()
+
+
+def _check_inflows(cfg: ExperimentConfig, loc: Locations) -> None:
+    inflows = cfg.network.net_params.inflows
+    if inflows is None:
+        return
+    types = cfg.vehicles.types
+    for j, flow in enumerate(inflows.get()):
+        if flow.veh_type not in types:
+            raise loc.error(
+                f"no vehicle group '{flow.veh_type}'{did_you_mean(flow.veh_type, types)}; "
+                f"inflows use the id of a group under vehicles: {', '.join(types) or '(none)'}",
+                ("network", "inflows", j, "veh_type"),
+            )
+
+
+def _check_network(cfg: ExperimentConfig, loc: Locations) -> None:
+    validate = _optional("flowrun.networks.registry", "validate_network")
+    if validate is None:
+        return
+    params = dict(cfg.network.net_params.additional_params)
+    try:
+        validate(cfg.network.type, params, cfg.vehicles, cfg.initial)
+    except ConfigError as err:
+        raise loc.error(err.message, ("network", *_sub_path(err.path))) from None

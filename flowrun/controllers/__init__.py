@@ -1,0 +1,90 @@
+"""Controllers: pure, vectorised formulas that turn vehicle state into commands.
+
+Flow-compatible names: ``from flowrun.controllers import IDMController, ContinuousRouter,
+RLController``.
+"""
+
+from flowrun.controllers.base import (
+    AccelerationController,
+    CarFollowingInputs,
+    make_inputs,
+)
+from flowrun.controllers.car_following import (
+    BandoFTLController,
+    BCMController,
+    CFMController,
+    GippsController,
+    IDMController,
+    LinearOVM,
+    OVMController,
+    bando_ftl_accel,
+    bcm_accel,
+    cfm_accel,
+    gipps_accel,
+    idm_accel,
+    linear_ovm_accel,
+    ovm_accel,
+)
+from flowrun.controllers.lane_change import (
+    LaneChangeController,
+    SimLaneChangeController,
+    StaticLaneChanger,
+)
+from flowrun.controllers.registry import (
+    build_controller,
+    controller_kind,
+    controller_names,
+    resolve_controller,
+)
+from flowrun.controllers.rl import RLController, SimCarFollowingController
+from flowrun.controllers.routing import ContinuousRouter, Router, needs_new_route
+from flowrun.controllers.velocity import (
+    FollowerStopper,
+    PISaturation,
+    follower_stopper_speed,
+    pi_saturation_speed,
+)
+
+#: Flow's base-class names.
+BaseController = AccelerationController
+BaseRouter = Router
+BaseLaneChangeController = LaneChangeController
+
+__all__ = [
+    "AccelerationController",
+    "BCMController",
+    "BandoFTLController",
+    "BaseController",
+    "BaseLaneChangeController",
+    "BaseRouter",
+    "CFMController",
+    "CarFollowingInputs",
+    "ContinuousRouter",
+    "FollowerStopper",
+    "GippsController",
+    "IDMController",
+    "LaneChangeController",
+    "LinearOVM",
+    "OVMController",
+    "PISaturation",
+    "RLController",
+    "Router",
+    "SimCarFollowingController",
+    "SimLaneChangeController",
+    "StaticLaneChanger",
+    "bando_ftl_accel",
+    "bcm_accel",
+    "build_controller",
+    "cfm_accel",
+    "controller_kind",
+    "controller_names",
+    "follower_stopper_speed",
+    "gipps_accel",
+    "idm_accel",
+    "linear_ovm_accel",
+    "make_inputs",
+    "needs_new_route",
+    "ovm_accel",
+    "pi_saturation_speed",
+    "resolve_controller",
+]

@@ -1,0 +1,154 @@
+"""``flowrun baseline``: run a config's environment N times with no learning, log and measure."""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from flowrun.config.dump import dump_config
+from flowrun.config.model import ExperimentConfig
+from flowrun.envs.factory import make_env
+from flowrun.errors import ConfigError
+from flowrun.experiment.metrics import RunMetrics
+from flowrun.experiment.rundir import create_run_dir, versions, write_json
+from flowrun.experiment.runner import Experiment, FrameSink
+from flowrun.recording.writer import McapRecorder
+
+log = logging.getLogger(__name__)
+
+GIF_EVERY = 10  # simulation steps between two GIF frames
+
+
+@dataclass
+class BaselineResult:
+    """What a baseline produced.
+
+    Attributes:
+        run_dir: the run folder.
+        metrics: one entry per completed (or interrupted) run.
+        logs: MCAP files written.
+        status: ``complete`` or ``interrupted``.
+    """
+
+    run_dir: Path
+    metrics: list[RunMetrics]
+    logs: list[Path]
+    status: str = "complete"
+
+
+def resolve_steps(cfg: ExperimentConfig, steps: int | None) -> int:
+    """Steps per run: ``--steps`` or the config's horizon."""
+    if steps is not None:
+        if steps < 1:
+            raise ConfigError(f"--steps must be >= 1, got {steps}")
+        return steps
+    if math.isinf(cfg.env.horizon):
+        raise ConfigError(
+            "env.horizon is infinite, so a run would never end; set env.horizon in the "
+            "config or pass --steps N",
+            path="env.horizon",
+        )
+    return int(cfg.env.horizon)
+
+
+def log_metadata(cfg: ExperimentConfig, seed: int, run: int) -> dict[str, str]:
+    """The MCAP ``flowrun`` metadata record."""
+    meta = {f"version.{k}": v for k, v in versions().items()}
+    meta.update(
+        {
+            "config_name": cfg.name,
+            "seed": str(seed),
+            "run": str(run),
+            "sim_step": repr(cfg.sim.sim_step),
+            "config_yaml": dump_config(cfg),
+        }
+    )
+    return meta
+
+
+def run_baseline(
+    cfg: ExperimentConfig,
+    *,
+    runs: int = 1,
+    steps: int | None = None,
+    out: Path = Path("runs"),
+    record: bool = True,
+    record_every: int = 1,
+    render: bool = False,
+    argv: list[str] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> BaselineResult:
+    """Run the config's environment ``runs`` times and write the run folder.
+
+    The seed is ``cfg.sim.seed`` (0 when unset); run ``i`` resets with seed ``seed + i``.
+    Interrupted by Ctrl-C/SIGTERM, the current log is finished, ``metrics.json`` says
+    ``interrupted``, and the ``KeyboardInterrupt`` propagates.
+    """
+    if runs < 1:
+        raise ConfigError(f"--runs must be >= 1, got {runs}")
+    if record_every < 1:
+        raise ConfigError(f"--record-every must be >= 1, got {record_every}")
+    n_steps = resolve_steps(cfg, steps)
+    seed = int(cfg.sim.seed or 0)
+    cfg = replace(cfg, sim=replace(cfg.sim, seed=seed))
+    run_dir = create_run_dir(out, cfg, seed, argv)
+    env = make_env(cfg, render_mode="rgb_array" if render else None, work_dir=run_dir / "sumo")
+    logs: list[Path] = []
+    gif_frames: list[Any] = []
+
+    def sink(run: int) -> FrameSink | None:
+        if not record:
+            return None
+        path = run_dir / f"run_{run}.mcap"
+        logs.append(path)
+        attachments = {"config.yaml": dump_config(cfg).encode()}
+        if env.k.net_file is not None:
+            attachments["network.net.xml"] = env.k.net_file.read_bytes()
+        return McapRecorder(
+            path,
+            metadata=log_metadata(cfg, seed, run),
+            attachments=attachments,
+            record_every=record_every,
+        )
+
+    def on_step(run: int, step: int) -> None:
+        if render and run == 0 and step % GIF_EVERY == 0:
+            gif_frames.append(env.render())
+        if progress is not None:
+            progress(run, step)
+
+    experiment = Experiment(env, sink_factory=sink if record else None, progress=on_step)
+    status = "interrupted"
+    try:
+        experiment.run(runs, n_steps, seed=seed)
+        status = "complete"
+    finally:
+        env.close()
+        metrics = experiment.metrics
+        write_json(
+            run_dir / "metrics.json",
+            {
+                "status": status,
+                "config": cfg.name,
+                "seed": seed,
+                "steps_per_run": n_steps,
+                "runs": [m.to_dict() for m in metrics],
+                "logs": [p.name for p in logs],
+            },
+        )
+        if gif_frames:
+            write_gif(run_dir / "render.gif", gif_frames)
+    return BaselineResult(run_dir, metrics, logs, status)
+
+
+def write_gif(path: Path, frames: list[Any]) -> None:
+    """Write RGB arrays as an animated GIF."""
+    from PIL import Image
+
+    images = [Image.fromarray(f) for f in frames if f is not None]
+    if images:
+        images[0].save(path, save_all=True, append_images=images[1:], duration=100, loop=0)

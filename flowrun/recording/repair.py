@@ -1,0 +1,98 @@
+"""Write a clean, indexed copy of whatever a (possibly damaged) flowrun log still holds."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from mcap.writer import CompressionType, Writer
+
+from flowrun.errors import RecordingError
+from flowrun.recording.reader import open_log
+from flowrun.recording.schema import VEHICLES_TOPIC
+from flowrun.recording.writer import CHUNK_SIZE, PROFILE, media_type
+
+
+@dataclass(frozen=True)
+class RepairReport:
+    """What :func:`repair` recovered.
+
+    Attributes:
+        in_path: the damaged (or intact) input.
+        out_path: the clean copy written.
+        salvaged: whether the input was damaged/unfinished.
+        input_bytes: size of the input, bytes.
+        recovered_bytes: bytes of the input that could be used.
+        messages: messages copied (all topics).
+        frames: ``/flowrun/vehicles`` messages copied (logged steps).
+        end_time: last simulation time copied, s (``None`` if nothing was copied).
+    """
+
+    in_path: Path
+    out_path: Path
+    salvaged: bool
+    input_bytes: int
+    recovered_bytes: int
+    messages: int
+    frames: int
+    end_time: float | None
+
+
+def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) -> RepairReport:
+    """Copy everything readable in ``in_path`` into a new MCAP with summary and footer.
+
+    Raises:
+        RecordingError: the input is not a flowrun log, or ``out_path`` is the input.
+    """
+    src, dst = Path(in_path), Path(out_path)
+    if dst.exists() and dst.resolve() == src.resolve():
+        raise RecordingError(f"--repair output {dst} is the input file; choose another path")
+    log = open_log(src)
+    messages = frames = 0
+    end_ns: int | None = None
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    with open(dst, "wb") as stream:
+        writer = Writer(stream, chunk_size=CHUNK_SIZE, compression=CompressionType.ZSTD)
+        writer.start(profile=PROFILE, library="flowrun-repair")
+        for name, data in log.all_metadata.items():
+            writer.add_metadata(name, data)
+        for name, blob in log.attachments.items():
+            writer.add_attachment(
+                create_time=0, log_time=0, name=name, media_type=media_type(name), data=blob
+            )
+        schema_ids: dict[int, int] = {}
+        channel_ids: dict[int, int] = {}
+        for schema, channel, message in log.messages():
+            if channel.id not in channel_ids:
+                new_schema = 0
+                if schema is not None:
+                    if schema.id not in schema_ids:
+                        schema_ids[schema.id] = writer.register_schema(
+                            schema.name, schema.encoding, schema.data
+                        )
+                    new_schema = schema_ids[schema.id]
+                channel_ids[channel.id] = writer.register_channel(
+                    channel.topic, channel.message_encoding, new_schema, dict(channel.metadata)
+                )
+            writer.add_message(
+                channel_ids[channel.id],
+                message.log_time,
+                message.data,
+                message.publish_time,
+                message.sequence,
+            )
+            messages += 1
+            frames += channel.topic == VEHICLES_TOPIC
+            end_ns = message.log_time if end_ns is None else max(end_ns, message.log_time)
+        writer.finish()
+    return RepairReport(
+        in_path=src,
+        out_path=dst,
+        salvaged=log.salvaged,
+        input_bytes=log.file_bytes,
+        recovered_bytes=log.recovered_bytes,
+        messages=messages,
+        frames=frames,
+        end_time=None if end_ns is None else end_ns / 1e9,
+    )
