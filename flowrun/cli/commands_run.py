@@ -52,14 +52,27 @@ def sigterm_as_interrupt() -> Iterator[None]:
 def metrics_table(title: str, rows: list[Any]) -> Table:
     """The closing table: one row per run."""
     table = Table(title=title)
-    for col in ("run", "mean speed", "last-half mean", "speed std", "min speed", "return",
-                "collisions", "teleports"):
+    for col in (
+        "run",
+        "mean speed",
+        "last-half mean",
+        "speed std",
+        "min speed",
+        "return",
+        "collisions",
+        "teleports",
+    ):
         table.add_column(col, justify="right")
     for m in rows:
         table.add_row(
-            str(m.run), f"{m.mean_speed:.3f} m/s", f"{m.last_half_mean_speed:.3f} m/s",
-            f"{m.speed_std:.3f} m/s", f"{m.min_speed:.3f} m/s", f"{m.episode_return:.2f}",
-            str(m.collisions), str(m.teleports),
+            str(m.run),
+            f"{m.mean_speed:.3f} m/s",
+            f"{m.last_half_mean_speed:.3f} m/s",
+            f"{m.speed_std:.3f} m/s",
+            f"{m.min_speed:.3f} m/s",
+            f"{m.episode_return:.2f}",
+            str(m.collisions),
+            str(m.teleports),
         )
     return table
 
@@ -68,13 +81,17 @@ def metrics_table(title: str, rows: list[Any]) -> Table:
 def baseline(
     config: ConfigArg,
     runs: Annotated[int, typer.Option("--runs", help="Number of runs.")] = 1,
-    steps: Annotated[int | None, typer.Option("--steps", help="Steps per run (default: env.horizon).")] = None,
+    steps: Annotated[
+        int | None, typer.Option("--steps", help="Steps per run (default: env.horizon).")
+    ] = None,
     seed: SeedOpt = None,
     set_: SetOpt = None,
     out: OutOpt = Path("runs"),
     no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
     record_every: Annotated[int, typer.Option("--record-every", help="Log every N-th step.")] = 1,
-    render: Annotated[bool, typer.Option("--render", help="Write run 0 as an animated GIF.")] = False,
+    render: Annotated[
+        bool, typer.Option("--render", help="Write run 0 as an animated GIF.")
+    ] = False,
 ) -> None:
     """Run a non-RL experiment: N runs of the config's environment, a table, MCAP logs."""
     from flowrun.config.loader import load_config
@@ -82,9 +99,15 @@ def baseline(
 
     cfg = load_config(config, overrides_with_seed(set_, seed))
     total = resolve_steps(cfg, steps)
-    columns = (TextColumn("run {task.fields[run]}"), BarColumn(), MofNCompleteColumn(),
-               TimeRemainingColumn())
-    with Progress(*columns, console=console, transient=True, disable=not sys.stderr.isatty()) as bar:
+    columns = (
+        TextColumn("run {task.fields[run]}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeRemainingColumn(),
+    )
+    with Progress(
+        *columns, console=console, transient=True, disable=not sys.stderr.isatty()
+    ) as bar:
         task = bar.add_task("baseline", total=total * runs, run=0)
 
         def progress(run: int, step: int) -> None:
@@ -93,8 +116,15 @@ def baseline(
         with sigterm_as_interrupt():
             try:
                 result = run_baseline(
-                    cfg, runs=runs, steps=steps, out=out, record=not no_record,
-                    record_every=record_every, render=render, argv=sys.argv, progress=progress,
+                    cfg,
+                    runs=runs,
+                    steps=steps,
+                    out=out,
+                    record=not no_record,
+                    record_every=record_every,
+                    render=render,
+                    argv=sys.argv,
+                    progress=progress,
                 )
             except KeyboardInterrupt:
                 console.print("[yellow]interrupted[/]: logs finished; metrics.json says so")

@@ -22,15 +22,14 @@ app = typer.Typer(
 
 def _register_commands() -> None:
     # Each module adds its commands to ``app``; imported here so ``app`` exists first.
-    from flowrun.cli import commands_run, commands_config
+    from flowrun.cli import commands_config, commands_run
 
     commands_run.register(app)
     commands_config.register(app)
-    try:
-        from flowrun.cli import commands_replay
-    except ImportError:  # pragma: no cover - replay module not present yet
-        return
+    from flowrun.cli import commands_replay, commands_train
+
     commands_replay.register(app)
+    commands_train.register(app)
 
 
 _register_commands()

@@ -211,3 +211,13 @@ def _check_network(cfg: ExperimentConfig, loc: Locations) -> None:
         validate(cfg.network.type, params, cfg.vehicles, cfg.initial)
     except ConfigError as err:
         raise loc.error(err.message, ("network", *_sub_path(err.path))) from None
+
+
+def override_config(cfg: ExperimentConfig, overrides: Sequence[str]) -> ExperimentConfig:
+    """``cfg`` with ``key.path=value`` overrides applied and validated again."""
+    from flowrun.config.dump import config_to_dict
+
+    data = config_to_dict(cfg)
+    locations = Locations(f"<config {cfg.name}>")
+    apply_overrides(data, overrides, locations)
+    return _build(data, locations)

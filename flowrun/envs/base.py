@@ -10,6 +10,7 @@ The base does the bookkeeping: seeded resets to the initial configuration, warm-
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import shutil
@@ -23,10 +24,10 @@ import gymnasium
 import numpy as np
 
 from flowrun.config.params import EnvParams, SumoParams
-from flowrun.errors import ConfigError
 from flowrun.envs.frames import snapshot_frame, snapshot_stats
 from flowrun.envs.render import render_ring
 from flowrun.envs.vehicles import GroupControl, build_controllers, build_table
+from flowrun.errors import ConfigError
 from flowrun.kernel import Kernel
 from flowrun.kernel.sumo import gui_available
 from flowrun.networks.base import Network
@@ -50,7 +51,7 @@ def check_additional_params(cls: type, env_params: EnvParams) -> None:
         )
 
 
-class Env(gymnasium.Env):  # type: ignore[type-arg]
+class Env(gymnasium.Env):
     """Base class of flowrun environments (Flow's ``flow.envs.Env``).
 
     Args:
@@ -69,7 +70,7 @@ class Env(gymnasium.Env):  # type: ignore[type-arg]
     ``collisions``, ``teleports`` and any reward terms in ``reward_terms``.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 10}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - gymnasium's
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = {}
 
     def __init__(
@@ -202,8 +203,8 @@ class Env(gymnasium.Env):  # type: ignore[type-arg]
             c = control.controller
             if c.is_rl or not c.commands_sumo or control.index.size == 0:
                 continue
-            accel = c.get_accel(vk.inputs(control.index, t), self._ctrl_rng)
-            vk.apply_acceleration_idx(control.index, accel)
+            accel = c.get_accel(vk.inputs(control.sl, t), self._ctrl_rng)
+            vk.apply_acceleration_idx(control.sl, accel)
         self.apply_rl_actions(action)
         self.additional_command()
         self.k.step()
@@ -255,7 +256,7 @@ class Env(gymnasium.Env):  # type: ignore[type-arg]
 
     def render(self) -> Any:
         """A top-down RGB picture of the ring (``render_mode="rgb_array"``), else ``None``."""
-        if self.render_mode != "rgb_array" or self._needs_reset and not self.k.started:
+        if self.render_mode != "rgb_array" or (self._needs_reset and not self.k.started):
             return None
         return render_ring(self.k)
 
@@ -269,10 +270,8 @@ class Env(gymnasium.Env):  # type: ignore[type-arg]
             shutil.rmtree(self.work_dir, ignore_errors=True)
 
     def __del__(self) -> None:
-        try:
+        with contextlib.suppress(Exception):  # interpreter shutdown
             self.close()
-        except Exception:  # pragma: no cover - interpreter shutdown
-            pass
 
 
 def _with_seed(params: SumoParams, seed: int) -> SumoParams:

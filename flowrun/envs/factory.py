@@ -88,7 +88,7 @@ def make_registered(
         render_mode: ``None`` or ``"rgb_array"``.
         env_changes: ``EnvParams`` fields to replace, e.g. ``horizon=500``.
     """
-    from flowrun.config.loader import config_from_dict, config_to_dict, load_config
+    from flowrun.config.loader import load_config, override_config
 
     if isinstance(config, ExperimentConfig):
         cfg = config
@@ -98,8 +98,6 @@ def make_registered(
     else:
         cfg = default_config(env_name)
     if overrides:
-        from flowrun.config.loader import apply_overrides
-
-        cfg = config_from_dict(apply_overrides(config_to_dict(cfg), list(overrides)))
+        cfg = override_config(cfg, list(overrides))
     env_params = replace(cfg.env, env_class=cfg.env.env_class or env_name, **env_changes)
     return make_env(replace(cfg, env=env_params), render_mode=render_mode)

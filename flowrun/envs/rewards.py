@@ -17,7 +17,7 @@ def desired_velocity(speeds: FloatArray, target_velocity: float, fail: bool = Fa
     n = speeds.size
     if fail or n == 0 or np.any(speeds < -100):
         return 0.0
-    max_cost = float(np.linalg.norm(np.full(n, target_velocity)))
+    max_cost = abs(target_velocity) * float(np.sqrt(n))
     cost = float(np.linalg.norm(speeds - target_velocity))
     eps = float(np.finfo(np.float32).eps)
     return max(max_cost - cost, 0.0) / (max_cost + eps)

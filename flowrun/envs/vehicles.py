@@ -24,6 +24,12 @@ class GroupControl:
     index: np.ndarray
     controller: AccelerationController
 
+    @property
+    def sl(self) -> slice:
+        """The group's vehicles as a slice (groups are contiguous in placement order)."""
+        start = int(self.index[0]) if self.index.size else 0
+        return slice(start, start + int(self.index.size))
+
 
 def mode_value(mode: str | int, table: dict[str, int], what: str) -> int:
     """A Flow mode name (or a raw SUMO int) as SUMO's integer bit set."""

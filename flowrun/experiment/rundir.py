@@ -9,7 +9,7 @@ import json
 import platform
 import shlex
 import sys
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
@@ -18,7 +18,16 @@ from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import FlowrunError
 
-PACKAGES = ("flowrun", "eclipse-sumo", "libsumo", "gymnasium", "numpy", "mcap", "stable-baselines3", "torch")
+PACKAGES = (
+    "flowrun",
+    "eclipse-sumo",
+    "libsumo",
+    "gymnasium",
+    "numpy",
+    "mcap",
+    "stable-baselines3",
+    "torch",
+)
 
 
 def versions() -> dict[str, str]:
@@ -32,9 +41,11 @@ def versions() -> dict[str, str]:
     return found
 
 
-def create_run_dir(out: Path, cfg: ExperimentConfig, seed: int, argv: list[str] | None = None) -> Path:
+def create_run_dir(
+    out: Path, cfg: ExperimentConfig, seed: int, argv: list[str] | None = None
+) -> Path:
     """Make a fresh run folder and write the resolved config, command line and versions."""
-    stamp = datetime.now(timezone.utc).strftime("%Y%m%d-%H%M%S")
+    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
     base = out / cfg.name / f"{stamp}-{seed}"
     run_dir = base
     n = 1

@@ -18,7 +18,7 @@ log = logging.getLogger(__name__)
 class FrameSink(Protocol):
     """Where a run's frames go (an MCAP recorder): ``write`` then ``close``."""
 
-    def write(self, frame: VehicleFrame, stats: StepStats) -> None:
+    def write(self, frame: VehicleFrame, stats: StepStats) -> object:
         """Store one step."""
 
     def close(self) -> None:

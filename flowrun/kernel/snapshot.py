@@ -76,7 +76,7 @@ def leaders_on_ring(
     follower = np.full(n, -1, dtype=np.int64)
     headway = np.full(n, np.inf)
     single_lane = n == 0 or lanes.min() == lanes.max()
-    for lane in (lanes[:1] if single_lane else np.unique(lanes)):
+    for lane in lanes[:1] if single_lane else np.unique(lanes):
         idx = np.arange(n) if single_lane else np.flatnonzero(lanes == lane)
         if idx.size < 2:
             continue

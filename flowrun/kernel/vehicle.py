@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from typing import Any, overload
+from typing import Any
 
 import numpy as np
 
@@ -35,7 +35,11 @@ class VehicleKernel:
         self.read_xy = True
         n = table.size
         self._index = {vid: i for i, vid in enumerate(table.ids)}
-        self.edges: list[str] = [""] * n
+        self._edges_cache: list[str] | None = [""] * n
+        self._edge_idx = np.zeros(n, dtype=np.int64)
+        self.leader_speed = np.zeros(n)
+        self.follower_speed = np.zeros(n)
+        self.follower_headway = np.full(n, np.inf)
         self.lanes = np.zeros(n, dtype=np.int64)
         self.lane_pos = np.zeros(n)
         self.position = np.zeros(n)
@@ -54,7 +58,7 @@ class VehicleKernel:
         self.speed_limit = np.full(n, np.inf)
         self._lane_change: dict[int, int] = {}
         self._routes: dict[int, list[str]] = {}
-        self._route_last = [""] * n
+        self._route_last = np.zeros(n, dtype=np.int64)
         self._edge_speed = {e.id: e.speed for e in spec.edges}
         self._multi_lane = any(e.lanes > 1 for e in spec.edges)
 
@@ -62,52 +66,93 @@ class VehicleKernel:
     def attach(self, api: Any) -> None:
         """Bind to a freshly started simulation (``libsumo`` or ``traci`` module)."""
         self.api = api
-        self._route_last = [self.spec.routes[e][-1] if e in self.spec.routes else "" for e in
-                            self.table.start_edges]
+        n_edges = len(self.spec.edges)
+        self._edge_ids = [e.id for e in self.spec.edges]
+        self._edge_pos = {e: i for i, e in enumerate(self._edge_ids)}
+        self._starts = np.array([self.spec.edge_starts[e] for e in self._edge_ids])
+        self._edge_speeds = np.array([e.speed for e in self.spec.edges])
+        start_idx = np.array(
+            [self._edge_pos.get(e, 0) for e in self.table.start_edges], dtype=np.int64
+        )
+        self._start_position = self._starts[start_idx] + np.array(self.table.start_lane_pos)
+        # A route runs once around the ring from its first edge: its last edge is the one
+        # before. ContinuousRouter gives a new loop when a car reaches that edge.
+        self._route_last = np.mod(start_idx - 1, n_edges)
+        self._edges_cache = None
 
     def update(self, first: bool = False) -> None:
-        """Read every vehicle's state from SUMO (one pass of plain getters) into the arrays."""
+        """Read every vehicle's state from SUMO into the arrays (plain getters, one pass).
+
+        On a closed ring two getters per car suffice: speed and odometer; the ring position is
+        the entry position plus the odometer (equal to SUMO's edge offset + lane position to
+        ~1e-13 m) and the edge follows from the position.
+        """
         v = self.api.vehicle
         ids = self.table.ids
         self.prev_speed = self.speed
-        edges = [v.getRoadID(i) for i in ids]
-        lane_pos = np.array([v.getLanePosition(i) for i in ids], dtype=np.float64)
-        speed = np.array([v.getSpeed(i) for i in ids], dtype=np.float64)
+        speed = np.array(list(map(v.getSpeed, ids)), dtype=np.float64)
         if self._multi_lane:
-            self.lanes = np.array([v.getLaneIndex(i) for i in ids], dtype=np.int64)
+            self.lanes = np.array(list(map(v.getLaneIndex, ids)), dtype=np.int64)
         if self.read_xy:
-            xy = np.array([v.getPosition(i) for i in ids], dtype=np.float64).reshape(-1, 2)
+            xy = np.array(list(map(v.getPosition, ids)), dtype=np.float64).reshape(-1, 2)
             self.x, self.y = xy[:, 0], xy[:, 1]
-        starts = self.spec.edge_starts
-        position = np.array([starts.get(e, math.nan) for e in edges]) + lane_pos
+        if self.spec.closed:
+            self.odometer = np.array(list(map(v.getDistance, ids)), dtype=np.float64)
+            self.position = np.mod(self._start_position + self.odometer, self.spec.length)
+            edge_idx = np.searchsorted(self._starts, self.position, side="right") - 1
+            self._edge_idx = edge_idx
+            self.lane_pos = self.position - self._starts[edge_idx]
+            self._edges_cache = None
+            self.speed_limit = self._edge_speeds[edge_idx]
+            self._reroute(edge_idx)
+            self.leader, self.follower, self.headway = leaders_on_ring(
+                self.position, self.lanes, self.table.lengths, self.spec.length
+            )
+        else:
+            self._update_open(v, ids)
         if first:
             self.prev_speed = speed
-            self.odometer = np.zeros(len(ids))
-        else:
-            moved = position - self.position
-            if self.spec.closed:
-                moved = np.mod(moved, self.spec.length)
-            self.odometer = self.odometer + np.where(np.isfinite(moved), moved, 0.0)
-        self._reroute(edges)
-        self.edges, self.lane_pos, self.speed, self.position = edges, lane_pos, speed, position
+        self.speed = speed
         self.accel_real = (speed - self.prev_speed) / self.dt
-        if edges != self.edges:
-            self.speed_limit = np.array([self._edge_speed.get(e, math.inf) for e in edges])
-        if self.spec.closed:
-            self.leader, self.follower, self.headway = leaders_on_ring(
-                position, self.lanes, self.table.lengths, self.spec.length
-            )
+        has_lead = self.leader >= 0
+        has_fol = self.follower >= 0
+        self.leader_speed = np.where(has_lead, speed[self.leader], speed)
+        self.follower_speed = np.where(has_fol, speed[self.follower], speed)
+        self.follower_headway = np.where(has_fol, self.headway[self.follower], np.inf)
 
-    def _reroute(self, edges: list[str]) -> None:
+    def _update_open(self, v: Any, ids: list[str]) -> None:
+        """Generic path for open networks: edge and lane position straight from SUMO."""
+        edges = list(map(v.getRoadID, ids))
+        self.lane_pos = np.array(list(map(v.getLanePosition, ids)), dtype=np.float64)
+        self.odometer = np.array(list(map(v.getDistance, ids)), dtype=np.float64)
+        starts = self.spec.edge_starts
+        self.position = np.array([starts.get(e, math.nan) for e in edges]) + self.lane_pos
+        self._edges_cache = edges
+        self.speed_limit = np.array([self._edge_speed.get(e, math.inf) for e in edges])
+        n = len(ids)
+        self.leader = np.full(n, -1, dtype=np.int64)
+        self.follower = np.full(n, -1, dtype=np.int64)
+        self.headway = np.full(n, np.inf)
+
+    @property
+    def edges(self) -> list[str]:
+        """Edge id of every vehicle (derived from the ring position on closed networks)."""
+        if self._edges_cache is None:
+            names = self._edge_ids
+            self._edges_cache = [names[i] for i in self._edge_idx.tolist()]
+        return self._edges_cache
+
+    def _reroute(self, edge_idx: np.ndarray) -> None:
         """ContinuousRouter: a car that reaches its route's last edge gets the next loop."""
-        if not self.table.continuous.any():
-            return
-        for i in np.flatnonzero(self.table.continuous):
-            edge = edges[i]
-            if edge == self._route_last[i] and edge in self.spec.routes:
-                route = self.spec.routes[edge]
-                self.api.vehicle.setRoute(self.table.ids[i], list(route))
-                self._route_last[i] = route[-1]
+        due = np.flatnonzero(self.table.continuous & (edge_idx == self._route_last))
+        for i in due.tolist():
+            vid = self.table.ids[i]
+            edge = self.api.vehicle.getRoadID(vid)  # SUMO's own view at the boundary
+            if edge not in self.spec.routes:
+                continue
+            route = self.spec.routes[edge]
+            self.api.vehicle.setRoute(vid, list(route))
+            self._route_last[i] = self._edge_pos[route[-1]]
 
     # ------------------------------------------------------------------ commands
     def apply_acceleration(self, veh_ids: str | Sequence[str], acc: Any) -> None:
@@ -118,7 +163,7 @@ class VehicleKernel:
         for vid, a in zip(veh_ids, accs, strict=True):
             self.accel_cmd[self._index[vid]] = a
 
-    def apply_acceleration_idx(self, idx: np.ndarray, acc: np.ndarray) -> None:
+    def apply_acceleration_idx(self, idx: np.ndarray | slice, acc: np.ndarray) -> None:
         """Command accelerations by vehicle index (the vectorised path controllers use)."""
         self.accel_cmd[idx] = acc
 
@@ -128,7 +173,7 @@ class VehicleKernel:
             veh_ids = [veh_ids]
         dirs = np.broadcast_to(np.asarray(direction).reshape(-1), (len(veh_ids),))
         for vid, d in zip(veh_ids, dirs, strict=True):
-            if int(round(float(d))) != 0:
+            if round(float(d)) != 0:
                 self._lane_change[self._index[vid]] = int(np.sign(d))
 
     def choose_routes(self, veh_ids: str | Sequence[str], route_choices: Any) -> None:
@@ -156,7 +201,8 @@ class VehicleKernel:
                 v.changeLane(ids[i], target_lane, 100000.0)
         for i, route in self._routes.items():
             v.setRoute(ids[i], route)
-            self._route_last[i] = route[-1]
+            if route[-1] in self._edge_pos:
+                self._route_last[i] = self._edge_pos[route[-1]]
         self.last_cmd = cmd
         self.accel_cmd = self._no_cmd.copy()
         self._lane_change = {}
@@ -169,22 +215,14 @@ class VehicleKernel:
         return 1
 
     # ------------------------------------------------------------------ controller inputs
-    def inputs(self, idx: np.ndarray, time: float) -> CarFollowingInputs:
+    def inputs(self, idx: np.ndarray | slice, time: float) -> CarFollowingInputs:
         """The state a car-following controller needs, for the vehicles ``idx``."""
-        lead = self.leader[idx]
-        fol = self.follower[idx]
-        speed = self.speed[idx]
-        has_lead = lead >= 0
-        has_fol = fol >= 0
-        leader_speed = np.where(has_lead, self.speed[np.maximum(lead, 0)], speed)
-        follower_speed = np.where(has_fol, self.speed[np.maximum(fol, 0)], speed)
-        follower_headway = np.where(has_fol, self.headway[np.maximum(fol, 0)], np.inf)
         return CarFollowingInputs(
-            speed=speed,
+            speed=self.speed[idx],
             headway=self.headway[idx],
-            leader_speed=leader_speed,
-            follower_headway=follower_headway,
-            follower_speed=follower_speed,
+            leader_speed=self.leader_speed[idx],
+            follower_headway=self.follower_headway[idx],
+            follower_speed=self.follower_speed[idx],
             speed_limit=self.speed_limit[idx],
             dt=self.dt,
             time=time,
@@ -226,10 +264,6 @@ class VehicleKernel:
         """The vehicle's group name."""
         return self.table.types[self._index[veh_id]]
 
-    @overload
-    def get_speed(self, veh_id: str, error: float = ...) -> float: ...
-    @overload
-    def get_speed(self, veh_id: Sequence[str], error: float = ...) -> list[float]: ...
     def get_speed(self, veh_id: str | Sequence[str], error: float = -1001) -> Any:
         """Speed in m/s (a list for a list of ids)."""
         return self._get(self.speed, veh_id)

@@ -48,7 +48,7 @@ def edges_xml(spec: NetworkSpec) -> str:
         shape_attr = f' shape="{shape}"' if shape else ""
         rows.append(
             f"    <edge id={quoteattr(e.id)} from={quoteattr(e.from_node)} "
-            f"to={quoteattr(e.to_node)} numLanes=\"{e.lanes}\" speed=\"{e.speed:.6f}\" "
+            f'to={quoteattr(e.to_node)} numLanes="{e.lanes}" speed="{e.speed:.6f}" '
             f'length="{e.length:.9f}" priority="78"{shape_attr}/>'
         )
     return "<edges>\n" + "\n".join(rows) + "\n</edges>\n"
@@ -73,13 +73,20 @@ def build_network(spec: NetworkSpec, out_dir: Path, name: str = "network") -> Pa
     tmp = net_file.with_suffix(".tmp.xml")
     cmd = [
         sumo_binary("netconvert"),
-        "--node-files", str(nod_file),
-        "--edge-files", str(edg_file),
-        "--output-file", str(tmp),
-        "--no-internal-links", "true",
-        "--no-turnarounds", "true",
-        "--offset.disable-normalization", "true",
-        "--no-warnings", "true",
+        "--node-files",
+        str(nod_file),
+        "--edge-files",
+        str(edg_file),
+        "--output-file",
+        str(tmp),
+        "--no-internal-links",
+        "true",
+        "--no-turnarounds",
+        "true",
+        "--offset.disable-normalization",
+        "true",
+        "--no-warnings",
+        "true",
     ]
     proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if proc.returncode != 0 or not tmp.exists():
@@ -96,17 +103,19 @@ def routes_xml(spec: NetworkSpec, vehicles: VehicleParams) -> str:
         cf, lc = g.car_following_params, g.lane_change_params
         color = f" color={quoteattr(g.color)}" if g.color else ""
         rows.append(
-            f"    <vType id={quoteattr(g.veh_id)} length=\"{cf.length}\" minGap=\"{cf.min_gap}\" "
+            f'    <vType id={quoteattr(g.veh_id)} length="{cf.length}" minGap="{cf.min_gap}" '
             f'maxSpeed="{cf.max_speed}" accel="{cf.accel}" decel="{cf.decel}" '
             f'sigma="{cf.sigma}" tau="{cf.tau}" speedFactor="{cf.speed_factor}" '
             f'speedDev="{cf.speed_dev}" impatience="{cf.impatience}" '
             f"carFollowModel={quoteattr(cf.car_follow_model)} "
-            f"laneChangeModel={quoteattr(lc.model)} lcStrategic=\"{lc.lc_strategic}\" "
+            f'laneChangeModel={quoteattr(lc.model)} lcStrategic="{lc.lc_strategic}" '
             f'lcCooperative="{lc.lc_cooperative}" lcSpeedGain="{lc.lc_speed_gain}" '
             f'lcKeepRight="{lc.lc_keep_right}"{color}/>'
         )
     for route_id, edges in spec.routes.items():
-        rows.append(f"    <route id={quoteattr(route_name(route_id))} edges={quoteattr(' '.join(edges))}/>")
+        rows.append(
+            f"    <route id={quoteattr(route_name(route_id))} edges={quoteattr(' '.join(edges))}/>"
+        )
     rows.append("</routes>")
     return "\n".join(rows) + "\n"
 

@@ -53,7 +53,11 @@ def ring_spec(length: float, lanes: int, speed_limit: float, resolution: int) ->
     radius = length / (2 * math.pi)
     step = 2 * math.pi / n
     nodes = tuple(
-        Node(names[i], radius * math.cos(-math.pi / 2 + i * step), radius * math.sin(-math.pi / 2 + i * step))
+        Node(
+            names[i],
+            radius * math.cos(-math.pi / 2 + i * step),
+            radius * math.sin(-math.pi / 2 + i * step),
+        )
         for i in range(n)
     )
     points = max(2, int(resolution))
@@ -61,11 +65,22 @@ def ring_spec(length: float, lanes: int, speed_limit: float, resolution: int) ->
     for i in range(n):
         a0 = -math.pi / 2 + i * step
         shape = tuple(
-            (radius * math.cos(a0 + k * step / (points - 1)), radius * math.sin(a0 + k * step / (points - 1)))
+            (
+                radius * math.cos(a0 + k * step / (points - 1)),
+                radius * math.sin(a0 + k * step / (points - 1)),
+            )
             for k in range(points)
         )
         edges.append(
-            Edge(names[i], names[i], names[(i + 1) % n], length / n, int(lanes), float(speed_limit), shape)
+            Edge(
+                names[i],
+                names[i],
+                names[(i + 1) % n],
+                length / n,
+                int(lanes),
+                float(speed_limit),
+                shape,
+            )
         )
     routes = {names[i]: tuple(names[(i + k) % n] for k in range(n)) for i in range(n)}
     starts = {names[i]: i * length / n for i in range(n)}
@@ -94,11 +109,17 @@ class RingNetwork(Network):
     def build_spec(self) -> NetworkSpec:
         """The ring's nodes, edges and routes."""
         p = self.params
-        return ring_spec(float(p["length"]), int(p["lanes"]), float(p["speed_limit"]), int(p["resolution"]))
+        return ring_spec(
+            float(p["length"]), int(p["lanes"]), float(p["speed_limit"]), int(p["resolution"])
+        )
 
     def start_positions(self, rng: np.random.Generator) -> StartPositions:
         """Flow's initial placement on the ring (see :func:`place_on_closed_road`)."""
-        lengths = [g.car_following_params.length for g in self.vehicles.groups for _ in range(g.num_vehicles)]
+        lengths = [
+            g.car_following_params.length
+            for g in self.vehicles.groups
+            for _ in range(g.num_vehicles)
+        ]
         positions, lanes = place_on_closed_road(
             self.spec.length, int(self.params["lanes"]), lengths, self.initial_config, rng
         )

@@ -200,7 +200,8 @@ class McapLog:
             )
         ch = self._channels[channel]
         sch = self._schemas.get(ch.schema_id)
-        if ch.message_encoding != schema.ENCODING or sch is None or sch.name != schema.VEHICLES_TYPE:
+        expected = schema.VEHICLES_TYPE
+        if ch.message_encoding != schema.ENCODING or sch is None or sch.name != expected:
             raise RecordingError(
                 f"{self.path}: {schema.VEHICLES_TOPIC} is encoded as {ch.message_encoding!r} "
                 f"with schema {sch.name if sch else None!r}; this flowrun reads "
@@ -336,7 +337,9 @@ class McapLog:
                     last_ids = ids
             yield schema.frame_from_message(msg, keep)
 
-    def stats(self, start_s: float | None = None, end_s: float | None = None) -> Iterator[StepStats]:
+    def stats(
+        self, start_s: float | None = None, end_s: float | None = None
+    ) -> Iterator[StepStats]:
         """Per-step aggregates between ``start_s`` and ``end_s`` (inclusive, s)."""
         for _, _, message in self.messages([schema.STATS_TOPIC], start_s, end_s):
             yield schema.decode_stats(message.data)
@@ -350,7 +353,9 @@ def open_log(path: str | os.PathLike[str]) -> McapLog:
     """
     p = Path(path)
     if not p.is_file():
-        raise RecordingError(f"{p}: no such file; expected an MCAP log (runs/<config>/<run>/*.mcap)")
+        raise RecordingError(
+            f"{p}: no such file; expected an MCAP log (runs/<config>/<run>/*.mcap)"
+        )
     with open(p, "rb") as f:
         head = f.read(len(MCAP_MAGIC))
     if head != MCAP_MAGIC:

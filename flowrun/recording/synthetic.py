@@ -12,7 +12,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from flowrun.recording.frames import StepStats, VehicleFrame
+from flowrun.recording.frames import FloatArray, StepStats, VehicleFrame
 
 VEHICLE_LENGTH = 5.0
 
@@ -71,8 +71,8 @@ def ring_frames(
     leaders = [ids[(i + 1) % n] for i in range(n)]
     edge_names = [f"e{k}" for k in range(num_edges)]
     edge_len = ring_length / num_edges
-    pos = np.arange(n) * (ring_length / n)
-    odometer = np.zeros(n)
+    pos: FloatArray = np.arange(n, dtype=np.float64) * (ring_length / n)
+    odometer: FloatArray = np.zeros(n)
     prev_speed: np.ndarray | None = None
     radius = ring_length / (2 * math.pi)
     for step in range(steps):

@@ -176,14 +176,16 @@ def wave_drift(
     speeds: FloatArray,
     ring_length: float,
     max_harmonic: int = 4,
+    grid_points: int = 256,
 ) -> float:
     """Estimated speed at which the slow zone (the speed minimum) travels around the ring.
 
-    For each logged time the "slowness" ``max(v) - v`` of every car is a weight on its
-    angle around the ring; the phase of the dominant circular harmonic of that weight
-    (``k`` stop-and-go waves on the ring) locates the slow zone(s). The unwrapped phase is
-    fitted linearly against time. Works on flattened points as returned by
-    :func:`time_space_data`.
+    At each logged time the cars' speeds are interpolated (periodically) onto a uniform grid
+    around the ring, so that bunched cars do not bias the estimate; the "slowness"
+    ``max(v) - v`` on that grid is decomposed into circular harmonics, and the phase of the
+    dominant one (``k`` stop-and-go waves on the ring) locates the slow zone(s). The
+    unwrapped phase is fitted linearly against time. Works on flattened points as returned
+    by :func:`time_space_data`.
 
     Args:
         times: simulation time of each point, s.
@@ -191,36 +193,43 @@ def wave_drift(
         speeds: speed of each point, m/s.
         ring_length: ring circumference, m.
         max_harmonic: largest number of waves considered.
+        grid_points: resolution of the interpolation grid.
 
     Returns:
         drift in m/s in the ring's position coordinate (negative = moving backwards, against
         the traffic); ``nan`` if there is no speed variation to track.
     """
     t = np.asarray(times, dtype=np.float64)
-    theta = 2 * np.pi * (np.asarray(positions, dtype=np.float64) % ring_length) / ring_length
+    x = np.asarray(positions, dtype=np.float64) % ring_length
     v = np.asarray(speeds, dtype=np.float64)
-    ok = np.isfinite(t) & np.isfinite(theta) & np.isfinite(v)
-    t, theta, v = t[ok], theta[ok], v[ok]
-    if t.size == 0:
+    ok = np.isfinite(t) & np.isfinite(x) & np.isfinite(v)
+    t, x, v = t[ok], x[ok], v[ok]
+    order = np.lexsort((x, t))
+    t, x, v = t[order], x[order], v[order]
+    uniq, first = np.unique(t, return_index=True)
+    bounds = [*first.tolist(), t.size]
+    grid = np.arange(grid_points) * (ring_length / grid_points)
+    rows: list[FloatArray] = []
+    row_times: list[float] = []
+    for i, t_i in enumerate(uniq.tolist()):
+        lo, hi = bounds[i], bounds[i + 1]
+        if hi - lo < 3:
+            continue
+        profile = np.interp(grid, x[lo:hi], v[lo:hi], period=ring_length)
+        rows.append(profile.max() - profile)
+        row_times.append(t_i)
+    if len(rows) < 2:
         return math.nan
-    uniq, inverse = np.unique(t, return_inverse=True)
-    vmax = np.zeros(uniq.size)
-    np.maximum.at(vmax, inverse, v)
-    weight = vmax[inverse] - v
-    strength = np.zeros(max_harmonic)
-    sums = []
-    for k in range(1, max_harmonic + 1):
-        z = np.zeros(uniq.size, dtype=np.complex128)
-        np.add.at(z, inverse, weight * np.exp(1j * k * theta))
-        sums.append(z)
-        strength[k - 1] = np.abs(z).sum()
-    k_best = int(np.argmax(strength)) + 1
-    z = sums[k_best - 1]
-    total = np.zeros(uniq.size)
-    np.add.at(total, inverse, weight)
-    valid = (total > 1e-9) & (np.abs(z) > 1e-6 * np.maximum(total, 1e-12))
+    slowness = np.array(rows)
+    harmonics = np.arange(1, max_harmonic + 1)
+    basis = np.exp(1j * np.outer(2 * np.pi * grid / ring_length, harmonics))
+    z = slowness @ basis  # (times, harmonics)
+    k_index = int(np.argmax(np.abs(z).sum(axis=0)))
+    zk = z[:, k_index]
+    total = slowness.sum(axis=1)
+    valid = (total > 1e-9) & (np.abs(zk) > 1e-6 * np.maximum(total, 1e-12))
     if valid.sum() < 2:
         return math.nan
-    phase = np.unwrap(np.angle(z[valid]))
-    slope = np.polyfit(uniq[valid], phase, 1)[0]
-    return float(slope * ring_length / (2 * np.pi * k_best))
+    phase = np.unwrap(np.angle(zk[valid]))
+    slope = np.polyfit(np.array(row_times)[valid], phase, 1)[0]
+    return float(slope * ring_length / (2 * np.pi * harmonics[k_index]))

@@ -48,7 +48,9 @@ class AccelEnv(Env):
     @property
     def observation_space(self) -> Box:  # type: ignore[override]
         """Normalised speeds and positions of all vehicles."""
-        return Box(low=0.0, high=1.0, shape=(2 * self.initial_vehicles.num_vehicles,), dtype=np.float32)
+        return Box(
+            low=0.0, high=1.0, shape=(2 * self.initial_vehicles.num_vehicles,), dtype=np.float32
+        )
 
     def sorted_ids(self) -> list[str]:
         """Vehicle ids in observation order."""
@@ -63,10 +65,13 @@ class AccelEnv(Env):
 
     def get_state(self) -> Any:
         """Speeds / max speed and positions / length, in [0, 1]."""
-        ids = self.sorted_ids()
-        speed = np.array(self.k.vehicle.get_speed(ids)) / self.k.network.max_speed()
-        pos = np.array([self.k.vehicle.get_x_by_id(v) for v in ids]) / self.k.network.length()
-        return np.clip(np.concatenate([speed, pos]), 0.0, 1.0)
+        vk = self.k.vehicle
+        speed, pos = vk.speed, vk.position
+        if self.env_params.additional_params.get("sort_vehicles"):
+            order = np.argsort(pos, kind="stable")
+            speed, pos = speed[order], pos[order]
+        obs = np.concatenate([speed / self.k.network.max_speed(), pos / self.k.network.length()])
+        return np.clip(obs, 0.0, 1.0)
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired-velocity reward (mean speed when ``env_params.evaluate``)."""
@@ -74,7 +79,8 @@ class AccelEnv(Env):
         if self.env_params.evaluate:
             return float(np.mean(speeds))
         reward = desired_velocity(
-            speeds, float(self.env_params.additional_params["target_velocity"]),
+            speeds,
+            float(self.env_params.additional_params["target_velocity"]),
             fail=bool(kwargs.get("fail", False)),
         )
         self.reward_terms = {"desired_velocity": reward}

@@ -1,0 +1,207 @@
+"""``flowrun replay``: summary, comparison, plots, CSV export and repair of MCAP logs."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator
+from contextlib import contextmanager
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from flowrun.cli.common import guarded
+from flowrun.errors import RecordingError
+from flowrun.recording import McapLog, McapRecorder, open_log, repair
+from flowrun.replay import (
+    compare,
+    plot_speeds,
+    plot_time_space,
+    plot_vehicle_speeds,
+    speed_series,
+    summarize,
+    summary_rows,
+    time_space_points,
+    to_csv,
+)
+from flowrun.replay.plots import plot_stride
+
+
+class PlotKind(StrEnum):
+    """What ``--plot`` draws."""
+
+    time_space = "time-space"
+    speed = "speed"
+    all = "all"
+
+
+@contextmanager
+def _warnings_to_stderr() -> Iterator[None]:
+    """Show the recording layer's warnings (e.g. salvaged logs) as ``warning:`` lines."""
+
+    class _Echo(logging.Handler):
+        def emit(self, record: logging.LogRecord) -> None:
+            typer.secho(f"warning: {record.getMessage()}", err=True, fg=typer.colors.YELLOW)
+
+    logger = logging.getLogger("flowrun.recording")
+    handler = _Echo(level=logging.WARNING)
+    old_propagate = logger.propagate
+    logger.addHandler(handler)
+    logger.propagate = False
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.propagate = old_propagate
+
+
+def _parse_vehicles(text: str | None) -> list[str] | None:
+    if text is None:
+        return None
+    ids = [v.strip() for v in text.split(",") if v.strip()]
+    if not ids:
+        raise RecordingError("--vehicles needs comma-separated vehicle ids, e.g. idm_0,rl_0")
+    return ids
+
+
+def _export_foxglove(
+    log: McapLog, out: Path, start: float | None, end: float | None, vehicles: list[str] | None
+) -> int:
+    """Copy the selected steps/vehicles into a new log (opens in Foxglove like any flowrun log)."""
+    if out.exists():
+        raise RecordingError(f"{out} exists; choose a new path for --foxglove")
+    stats = {s.step: s for s in log.stats(start, end)}
+    written = 0
+    with McapRecorder(out, metadata=log.metadata, attachments=log.attachments) as rec:
+        for frame in log.frames(start, end, vehicles):
+            if frame.step in stats:
+                written += rec.write(frame, stats[frame.step])
+    return written
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``replay`` command to ``app``."""
+
+    @app.command("replay")
+    @guarded
+    def replay(
+        logs: Annotated[
+            list[Path],
+            typer.Argument(help="One MCAP log, two to compare, or IN OUT with --repair."),
+        ],
+        start: Annotated[
+            float | None, typer.Option("--from", help="First simulation time to read [s].")
+        ] = None,
+        end: Annotated[
+            float | None, typer.Option("--to", help="Last simulation time to read [s].")
+        ] = None,
+        vehicles: Annotated[
+            str | None, typer.Option("--vehicles", help="Only these vehicle ids: id,id,...")
+        ] = None,
+        plot: Annotated[
+            PlotKind | None, typer.Option("--plot", help="Write PNG plots.")
+        ] = None,
+        out: Annotated[
+            Path | None,
+            typer.Option("--out", help="Folder for plots [default: <log folder>/replay]."),
+        ] = None,
+        csv: Annotated[
+            Path | None, typer.Option("--csv", help="Export Flow emission-style CSV here.")
+        ] = None,
+        repair_: Annotated[
+            bool,
+            typer.Option("--repair", help="Write a clean copy of a damaged log: --repair IN OUT."),
+        ] = False,
+        foxglove: Annotated[
+            Path | None,
+            typer.Option("--foxglove", help="Write the selected steps/vehicles to a new MCAP."),
+        ] = None,
+    ) -> None:
+        """Summarise a run's MCAP log (or compare two); plot it, export CSV, repair it."""
+        console = Console()
+        with _warnings_to_stderr():
+            if repair_:
+                if len(logs) != 2:
+                    raise RecordingError(
+                        f"--repair takes an input and an output log (IN OUT), got {len(logs)} "
+                        "path(s)"
+                    )
+                src, dst = logs
+                if dst.exists():
+                    raise RecordingError(f"{dst} exists; choose a new path for the repaired copy")
+                report = repair(src, dst)
+                state = "damaged" if report.salvaged else "intact"
+                until = f" up to t={report.end_time:.1f} s" if report.end_time is not None else ""
+                typer.echo(
+                    f"wrote {dst}: {report.frames} logged steps{until} from a {state} log "
+                    f"({report.recovered_bytes} of {report.input_bytes} bytes usable)"
+                )
+                return
+            if not 1 <= len(logs) <= 2:
+                raise RecordingError(f"replay takes one log or two to compare, got {len(logs)}")
+            if start is not None and end is not None and end < start:
+                raise RecordingError(f"--to ({end}) is before --from ({start})")
+            if len(logs) == 2 and (csv is not None or foxglove is not None):
+                raise RecordingError("--csv and --foxglove work on one log; drop the second log")
+            chosen = _parse_vehicles(vehicles)
+            opened = [open_log(p) for p in logs]
+            series = [
+                speed_series(lg, start_s=start, end_s=end, vehicles=chosen) for lg in opened
+            ]
+            if chosen is not None:
+                seen = set().union(*(s.vehicle_types for s in series))
+                missing = [v for v in chosen if v not in seen]
+                if missing:
+                    typer.secho(f"warning: vehicle id(s) not in the log: {', '.join(missing)}",
+                                err=True, fg=typer.colors.YELLOW)
+                if not seen:
+                    raise RecordingError(
+                        f"none of --vehicles {vehicles} appears in the selected steps"
+                    )
+            summaries = [
+                summarize(lg, start_s=start, end_s=end, vehicles=chosen, series=s)
+                for lg, s in zip(opened, series, strict=True)
+            ]
+            if len(opened) == 1:
+                table = Table(title=summaries[0].name, show_header=False)
+                table.add_column("", style="bold")
+                table.add_column("")
+                for label, value in summary_rows(summaries[0]).items():
+                    table.add_row(label, value)
+            else:
+                table = Table(title="flowrun replay: comparison")
+                table.add_column("", style="bold")
+                table.add_column(f"A: {logs[0].name}")
+                table.add_column(f"B: {logs[1].name}")
+                table.add_column("B - A", justify="right")
+                for label, (va, vb, delta) in compare(summaries[0], summaries[1]).items():
+                    table.add_row(label, va, vb, delta)
+            console.print(table)
+
+            if csv is not None:
+                rows = to_csv(opened[0], csv, start_s=start, end_s=end, vehicles=chosen)
+                typer.echo(f"wrote {csv} ({rows} rows)")
+            if foxglove is not None:
+                n = _export_foxglove(opened[0], foxglove, start, end, chosen)
+                typer.echo(f"wrote {foxglove} ({n} logged steps)")
+            if plot is not None:
+                folder = out if out is not None else logs[0].parent / "replay"
+                written: list[Path] = []
+                if plot in (PlotKind.speed, PlotKind.all):
+                    written.append(plot_speeds(opened, folder / "speeds.png", series=series))
+                if plot in (PlotKind.time_space, PlotKind.all):
+                    for i, lg in enumerate(opened):
+                        data = time_space_points(
+                            lg, start_s=start, end_s=end, vehicles=chosen, every=plot_stride(lg)
+                        )
+                        suffix = "" if len(opened) == 1 else ("_A", "_B")[i]
+                        written.append(plot_time_space(
+                            lg, folder / f"time_space{suffix}.png", data=data))
+                        if plot is PlotKind.all:
+                            written.append(plot_vehicle_speeds(
+                                lg, folder / f"vehicle_speeds{suffix}.png", data=data))
+                for path in written:
+                    typer.echo(f"wrote {path}")

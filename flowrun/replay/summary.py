@@ -1,0 +1,219 @@
+"""Summary numbers of a logged run, and a side-by-side comparison of two runs."""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from flowrun.recording import McapLog
+from flowrun.replay.analysis import SpeedSeries, speed_series
+
+
+@dataclass(frozen=True)
+class ReplaySummary:
+    """What ``flowrun replay`` reports about one log.
+
+    Speed definitions (match ``metrics.json`` of the run that wrote the log):
+    ``mean_speed`` is the mean over logged steps of the per-step mean speed of the selected
+    vehicles; ``min_speed``/``max_speed`` are the min/max over all vehicles and steps;
+    ``speed_std`` is the mean over logged steps of the (population) standard deviation of
+    speed across vehicles.
+
+    Attributes:
+        name: run label (config name, seed, file name).
+        config_name: ``config_name`` metadata ("" if absent).
+        seed: ``seed`` metadata ("" if absent).
+        versions: the ``*_version`` metadata entries.
+        first_time: first logged simulation time, s.
+        last_time: last logged simulation time, s.
+        duration_s: simulated time covered by the logged steps, s.
+        logged_steps: number of logged steps read.
+        sim_steps: simulation steps spanned (last - first + 1).
+        vehicles_by_type: distinct vehicle ids seen, per type.
+        rl_vehicles: distinct RL-driven vehicle ids seen.
+        mean_speed, min_speed, max_speed, speed_std: m/s, see above.
+        collisions: collisions over the logged steps.
+        teleports: teleports over the logged steps.
+        episode_return: sum of the finite rewards, per RL step (``None`` when none is finite).
+        salvaged: whether the log was damaged and read up to the damage.
+        recovered_bytes: bytes of the file that were usable.
+    """
+
+    name: str
+    config_name: str
+    seed: str
+    versions: dict[str, str]
+    first_time: float
+    last_time: float
+    duration_s: float
+    logged_steps: int
+    sim_steps: int
+    vehicles_by_type: dict[str, int]
+    rl_vehicles: int
+    mean_speed: float
+    min_speed: float
+    max_speed: float
+    speed_std: float
+    collisions: int
+    teleports: int
+    episode_return: float | None
+    salvaged: bool
+    recovered_bytes: int
+
+
+def run_label(log: McapLog) -> str:
+    """A short name for a log: ``<config> (seed N) - <file>``."""
+    meta = log.metadata
+    name = meta.get("config_name", "")
+    seed = meta.get("seed", "")
+    parts = [p for p in (name, f"seed {seed}" if seed else "") if p]
+    head = f"{parts[0]} ({parts[1]})" if len(parts) == 2 else "".join(parts)
+    return f"{head} - {log.path.name}" if head else log.path.name
+
+
+def _nanmean(a: np.ndarray) -> float:
+    finite = a[np.isfinite(a)]
+    return float(finite.mean()) if finite.size else math.nan
+
+
+def summarize(
+    log: McapLog,
+    *,
+    start_s: float | None = None,
+    end_s: float | None = None,
+    vehicles: Iterable[str] | None = None,
+    series: SpeedSeries | None = None,
+) -> ReplaySummary:
+    """Summarise a log (optionally a time window / some vehicles).
+
+    Speeds come from the ``/flowrun/vehicles`` frames; collisions, teleports and rewards from
+    ``/flowrun/stats``. The return divides the summed per-step reward by the metadata
+    ``sims_per_step`` (each RL step's reward is logged on each of its simulation steps) and
+    multiplies by ``record_every`` (exact only when nothing was thinned out).
+
+    Args:
+        log: an opened log.
+        start_s: first simulation time to include, s.
+        end_s: last simulation time to include, s.
+        vehicles: restrict the speed numbers to these ids.
+        series: a precomputed :func:`speed_series` of the same selection (saves a pass).
+    """
+    s = series or speed_series(log, start_s=start_s, end_s=end_s, vehicles=vehicles)
+    collisions = teleports = 0
+    reward_sum = 0.0
+    finite_rewards = 0
+    for st in log.stats(start_s, end_s):
+        collisions += st.collisions
+        teleports += st.teleports
+        if math.isfinite(st.reward):
+            reward_sum += st.reward
+            finite_rewards += 1
+    meta = log.metadata
+    sims_per_step = max(int(meta.get("sims_per_step", "1") or 1), 1)
+    record_every = max(int(meta.get("record_every", "1") or 1), 1)
+    episode_return = reward_sum * record_every / sims_per_step if finite_rewards else None
+    n = s.times.size
+    first = float(s.times[0]) if n else math.nan
+    last = float(s.times[-1]) if n else math.nan
+    interval = float(np.median(np.diff(s.times))) if n > 1 else 0.0
+    has_speed = s.count > 0
+    return ReplaySummary(
+        name=run_label(log),
+        config_name=meta.get("config_name", ""),
+        seed=meta.get("seed", ""),
+        versions={k: v for k, v in meta.items() if k.endswith("_version")},
+        first_time=first,
+        last_time=last,
+        duration_s=(last - first + interval) if n else 0.0,
+        logged_steps=n,
+        sim_steps=int(s.steps[-1] - s.steps[0] + 1) if n else 0,
+        vehicles_by_type=dict(sorted(Counter(s.vehicle_types.values()).items())),
+        rl_vehicles=len(s.rl_ids),
+        mean_speed=_nanmean(s.mean),
+        min_speed=float(np.nanmin(s.min[has_speed])) if has_speed.any() else math.nan,
+        max_speed=float(np.nanmax(s.max[has_speed])) if has_speed.any() else math.nan,
+        speed_std=_nanmean(s.std),
+        collisions=collisions,
+        teleports=teleports,
+        episode_return=episode_return,
+        salvaged=log.salvaged,
+        recovered_bytes=log.recovered_bytes,
+    )
+
+
+def _num(x: float | None, unit: str = "", digits: int = 3) -> str:
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "-"
+    return f"{x:.{digits}f}{unit}"
+
+
+def summary_rows(s: ReplaySummary) -> dict[str, str]:
+    """The summary as ordered ``label -> formatted value`` rows (what the CLI prints)."""
+    rows = {
+        "run": s.name,
+        "config": s.config_name or "-",
+        "seed": s.seed or "-",
+    }
+    for key, value in s.versions.items():
+        rows[key.removesuffix("_version") + " version"] = value
+    rows.update(
+        {
+            "simulated duration": _num(s.duration_s, " s", 1),
+            "time range": f"{_num(s.first_time, '', 1)} - {_num(s.last_time, ' s', 1)}",
+            "logged steps": str(s.logged_steps),
+            "simulation steps": str(s.sim_steps),
+            "vehicles": ", ".join(f"{t}: {c}" for t, c in s.vehicles_by_type.items()) or "-",
+            "RL vehicles": str(s.rl_vehicles),
+            "mean speed": _num(s.mean_speed, " m/s"),
+            "min speed": _num(s.min_speed, " m/s"),
+            "max speed": _num(s.max_speed, " m/s"),
+            "speed std across vehicles": _num(s.speed_std, " m/s"),
+            "collisions": str(s.collisions),
+            "teleports": str(s.teleports),
+            "return": _num(s.episode_return, "", 3),
+        }
+    )
+    if s.salvaged:
+        rows["salvaged"] = f"yes ({s.recovered_bytes} bytes recovered)"
+    return rows
+
+
+_NUMERIC = {
+    "mean speed": "mean_speed",
+    "min speed": "min_speed",
+    "max speed": "max_speed",
+    "speed std across vehicles": "speed_std",
+    "simulated duration": "duration_s",
+    "collisions": "collisions",
+    "teleports": "teleports",
+    "return": "episode_return",
+}
+
+
+def compare(
+    a: McapLog | ReplaySummary, b: McapLog | ReplaySummary, **select: object
+) -> dict[str, tuple[str, str, str]]:
+    """Two runs side by side: ``label -> (value A, value B, B - A)``.
+
+    Args:
+        a: first log (or its summary).
+        b: second log (or its summary).
+        **select: ``start_s``/``end_s``/``vehicles`` passed to :func:`summarize` for logs.
+    """
+    sa = a if isinstance(a, ReplaySummary) else summarize(a, **select)  # type: ignore[arg-type]
+    sb = b if isinstance(b, ReplaySummary) else summarize(b, **select)  # type: ignore[arg-type]
+    ra, rb = summary_rows(sa), summary_rows(sb)
+    table: dict[str, tuple[str, str, str]] = {}
+    for label in list(ra) + [k for k in rb if k not in ra]:
+        delta = ""
+        attr = _NUMERIC.get(label)
+        if attr is not None:
+            va, vb = getattr(sa, attr), getattr(sb, attr)
+            if va is not None and vb is not None and math.isfinite(va) and math.isfinite(vb):
+                delta = f"{vb - va:+.3f}"
+        table[label] = (ra.get(label, "-"), rb.get(label, "-"), delta)
+    return table

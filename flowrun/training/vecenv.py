@@ -1,0 +1,79 @@
+"""Parallel training environments: one SUMO per subprocess (libsumo runs one per process)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from flowrun.config.model import ExperimentConfig
+from flowrun.training.deps import require
+
+if TYPE_CHECKING:
+    import gymnasium
+    from stable_baselines3.common.vec_env import VecEnv
+
+
+@dataclass(frozen=True)
+class EnvFactory:
+    """Picklable ``() -> env`` for ``SubprocVecEnv``: the config's env in a ``Monitor``.
+
+    Attributes:
+        cfg: the experiment.
+        monitor_file: where ``Monitor`` writes episode returns (``None``: nowhere).
+    """
+
+    cfg: ExperimentConfig
+    monitor_file: str | None = None
+
+    def __call__(self) -> gymnasium.Env[Any, Any]:
+        """Build the environment (in the process that calls it)."""
+        from flowrun.envs.factory import make_env
+
+        monitor = require("stable_baselines3.common.monitor").Monitor
+        env = make_env(self.cfg)
+        return monitor(env, filename=self.monitor_file, info_keywords=("mean_speed",))
+
+
+def make_vec_env(
+    cfg: ExperimentConfig,
+    n_envs: int,
+    seed: int,
+    monitor_dir: Path | None = None,
+    subprocess: bool = True,
+) -> VecEnv:
+    """``n_envs`` environments of a config; env ``rank`` is seeded ``seed + rank``.
+
+    Args:
+        cfg: the experiment.
+        n_envs: number of environments.
+        seed: base seed.
+        monitor_dir: folder for one ``Monitor`` CSV per env (``None``: none written).
+        subprocess: one subprocess per env (required for more than one env); ``False``
+            builds a single env in this process.
+    """
+    vec = require("stable_baselines3.common.vec_env")
+    factories = [
+        EnvFactory(cfg, None if monitor_dir is None else str(monitor_dir / f"env_{rank}"))
+        for rank in range(n_envs)
+    ]
+    if subprocess:
+        venv: VecEnv = vec.SubprocVecEnv(factories, start_method="forkserver")
+    else:
+        if n_envs != 1:
+            raise ValueError("more than one env needs subprocesses (libsumo: one SUMO a process)")
+        venv = vec.DummyVecEnv(factories)
+    venv.seed(seed)
+    return venv
+
+
+def wrap_normalize(venv: VecEnv, stats: Path | None, training: bool) -> VecEnv:
+    """Wrap in ``VecNormalize``: fresh, or with the statistics saved at ``stats``."""
+    vec = require("stable_baselines3.common.vec_env")
+    if stats is not None:
+        normalized: VecEnv = vec.VecNormalize.load(str(stats), venv)
+        normalized.training = training  # type: ignore[attr-defined]
+        if not training:
+            normalized.norm_reward = False  # type: ignore[attr-defined]
+        return normalized
+    return vec.VecNormalize(venv, training=training, norm_reward=training)  # type: ignore[no-any-return]
