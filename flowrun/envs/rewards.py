@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import numpy.typing as npt
 
@@ -18,7 +20,8 @@ def desired_velocity(speeds: FloatArray, target_velocity: float, fail: bool = Fa
     if fail or n == 0 or np.any(speeds < -100):
         return 0.0
     max_cost = abs(target_velocity) * float(np.sqrt(n))
-    cost = float(np.linalg.norm(speeds - target_velocity))
+    diff = speeds - target_velocity
+    cost = math.sqrt(float(np.dot(diff, diff)))
     eps = float(np.finfo(np.float32).eps)
     return max(max_cost - cost, 0.0) / (max_cost + eps)
 

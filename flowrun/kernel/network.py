@@ -14,6 +14,7 @@ class NetworkKernel:
         self.spec = spec
         self._edges = {e.id: e for e in spec.edges}
         self._starts = sorted((s, e) for e, s in spec.edge_starts.items())
+        self._max_speed = max(e.speed for e in spec.edges)
 
     def length(self) -> float:
         """Total length of the network along its edges, m."""
@@ -37,7 +38,7 @@ class NetworkKernel:
 
     def max_speed(self) -> float:
         """Highest speed limit in the network, m/s."""
-        return max(e.speed for e in self.spec.edges)
+        return self._max_speed
 
     def get_x(self, edge: str, position: float) -> float:
         """Position along the network of ``position`` metres into ``edge``."""

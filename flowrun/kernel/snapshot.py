@@ -86,3 +86,37 @@ def leaders_on_ring(
         follower[ahead] = idx
         headway[idx] = np.mod(position[ahead] - position[idx], ring_length) - lengths[ahead]
     return leader, follower, headway
+
+
+class RingFollowing:
+    """Who follows whom on a closed ring, reusing the last order while it still holds.
+
+    On a single lane cars cannot pass, so the cyclic order found at the start stays valid; it
+    is checked every step for the price of one sum (the gaps of a consistent cyclic order add
+    up to exactly one ring length) and recomputed by :func:`leaders_on_ring` when it breaks.
+
+    Attributes:
+        complete: every car has a leader and a follower (single lane, two cars or more).
+    """
+
+    def __init__(self, lengths: FloatArray, ring_length: float) -> None:
+        self.lengths = lengths
+        self.ring_length = ring_length
+        self.complete = False
+        self._leader: IntArray | None = None
+        self._follower: IntArray | None = None
+
+    def compute(
+        self, position: FloatArray, lanes: IntArray
+    ) -> tuple[IntArray, IntArray, FloatArray]:
+        """Leader index, follower index and headway (m) of every car."""
+        n = position.shape[0]
+        single = n >= 2 and lanes.min() == lanes.max()
+        if single and self._leader is not None and self._follower is not None:
+            gap = np.mod(position[self._leader] - position, self.ring_length)
+            if abs(float(gap.sum()) - self.ring_length) < 1e-6 * self.ring_length:
+                return self._leader, self._follower, gap - self.lengths[self._leader]
+        leader, follower, headway = leaders_on_ring(position, lanes, self.lengths, self.ring_length)
+        self.complete = single
+        self._leader, self._follower = (leader, follower) if single else (None, None)
+        return leader, follower, headway

@@ -8,14 +8,37 @@ just before the simulation step.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from flowrun.controllers.base import CarFollowingInputs
-from flowrun.kernel.snapshot import VehicleTable, leaders_on_ring
+from flowrun.kernel.snapshot import RingFollowing, VehicleTable
 from flowrun.networks.base import NetworkSpec
+
+
+@dataclass(frozen=True)
+class FastCalls:
+    """The per-vehicle calls made every step, bound once.
+
+    libsumo's Python wrappers add a function layer over the compiled calls; on the hot path
+    the compiled ones are used directly (same arguments, same results). TraCI keeps its own.
+    """
+
+    get_speed: Callable[[str], float]
+    get_distance: Callable[[str], float]
+    slow_down: Callable[[str, float, float], None]
+
+    @staticmethod
+    def of(api: Any) -> FastCalls:
+        """The fastest equivalent calls of ``api`` (``libsumo`` or ``traci``)."""
+        raw = getattr(api, "_libsumo", None)
+        if raw is not None and hasattr(raw, "vehicle_getSpeed"):
+            return FastCalls(raw.vehicle_getSpeed, raw.vehicle_getDistance, raw.vehicle_slowDown)
+        v = api.vehicle
+        return FastCalls(v.getSpeed, v.getDistance, v.slowDown)
 
 
 class VehicleKernel:
@@ -36,12 +59,13 @@ class VehicleKernel:
         n = table.size
         self._index = {vid: i for i, vid in enumerate(table.ids)}
         self._edges_cache: list[str] | None = [""] * n
-        self._edge_idx = np.zeros(n, dtype=np.int64)
+        self._lane_pos = np.zeros(n)
+        self._stale_edges = False
+        self._next_reroute = np.full(n, np.inf)
         self.leader_speed = np.zeros(n)
         self.follower_speed = np.zeros(n)
         self.follower_headway = np.full(n, np.inf)
         self.lanes = np.zeros(n, dtype=np.int64)
-        self.lane_pos = np.zeros(n)
         self.position = np.zeros(n)
         self.speed = np.zeros(n)
         self.prev_speed = np.zeros(n)
@@ -58,7 +82,6 @@ class VehicleKernel:
         self.speed_limit = np.full(n, np.inf)
         self._lane_change: dict[int, int] = {}
         self._routes: dict[int, list[str]] = {}
-        self._route_last = np.zeros(n, dtype=np.int64)
         self._edge_speed = {e.id: e.speed for e in spec.edges}
         self._multi_lane = any(e.lanes > 1 for e in spec.edges)
 
@@ -66,47 +89,55 @@ class VehicleKernel:
     def attach(self, api: Any) -> None:
         """Bind to a freshly started simulation (``libsumo`` or ``traci`` module)."""
         self.api = api
-        n_edges = len(self.spec.edges)
-        self._edge_ids = [e.id for e in self.spec.edges]
+        self._fast = FastCalls.of(api)
+        spec = self.spec
+        self._edge_ids = [e.id for e in spec.edges]
         self._edge_pos = {e: i for i, e in enumerate(self._edge_ids)}
-        self._starts = np.array([self.spec.edge_starts[e] for e in self._edge_ids])
-        self._edge_speeds = np.array([e.speed for e in self.spec.edges])
+        self._starts = np.array([spec.edge_starts[e] for e in self._edge_ids])
+        self._edge_speeds = np.array([e.speed for e in spec.edges])
+        self._uniform_speed = bool(np.all(self._edge_speeds == self._edge_speeds[0]))
         start_idx = np.array(
             [self._edge_pos.get(e, 0) for e in self.table.start_edges], dtype=np.int64
         )
         self._start_position = self._starts[start_idx] + np.array(self.table.start_lane_pos)
-        # A route runs once around the ring from its first edge: its last edge is the one
-        # before. ContinuousRouter gives a new loop when a car reaches that edge.
-        self._route_last = np.mod(start_idx - 1, n_edges)
-        self._edges_cache = None
+        self._following = RingFollowing(self.table.lengths, spec.length)
+        self.speed_limit = np.full(self.table.size, self._edge_speeds[0])
+        # A route runs once around the ring from its first edge, so its last edge is the one
+        # before: ContinuousRouter gives a car its next loop when its odometer reaches it.
+        self._next_reroute = self._distance_to_route_end(start_idx, self._start_position)
+        self._stale_edges = True
+
+    def _distance_to_route_end(self, edge_idx: np.ndarray, position: np.ndarray) -> np.ndarray:
+        last = np.mod(edge_idx - 1, len(self._edge_ids))
+        return np.mod(self._starts[last] - position, self.spec.length)
 
     def update(self, first: bool = False) -> None:
         """Read every vehicle's state from SUMO into the arrays (plain getters, one pass).
 
-        On a closed ring two getters per car suffice: speed and odometer; the ring position is
+        On a closed ring two getters per car suffice: speed and odometer. The ring position is
         the entry position plus the odometer (equal to SUMO's edge offset + lane position to
-        ~1e-13 m) and the edge follows from the position.
+        ~1e-13 m); edges and lane positions follow from it when someone asks.
         """
         v = self.api.vehicle
+        fast = self._fast
         ids = self.table.ids
         self.prev_speed = self.speed
-        speed = np.array(list(map(v.getSpeed, ids)), dtype=np.float64)
+        speed = np.array(list(map(fast.get_speed, ids)), dtype=np.float64)
         if self._multi_lane:
             self.lanes = np.array(list(map(v.getLaneIndex, ids)), dtype=np.int64)
         if self.read_xy:
             xy = np.array(list(map(v.getPosition, ids)), dtype=np.float64).reshape(-1, 2)
             self.x, self.y = xy[:, 0], xy[:, 1]
         if self.spec.closed:
-            self.odometer = np.array(list(map(v.getDistance, ids)), dtype=np.float64)
+            self.odometer = np.array(list(map(fast.get_distance, ids)), dtype=np.float64)
             self.position = np.mod(self._start_position + self.odometer, self.spec.length)
-            edge_idx = np.searchsorted(self._starts, self.position, side="right") - 1
-            self._edge_idx = edge_idx
-            self.lane_pos = self.position - self._starts[edge_idx]
-            self._edges_cache = None
-            self.speed_limit = self._edge_speeds[edge_idx]
-            self._reroute(edge_idx)
-            self.leader, self.follower, self.headway = leaders_on_ring(
-                self.position, self.lanes, self.table.lengths, self.spec.length
+            self._stale_edges = True
+            if not self._uniform_speed:
+                self.speed_limit = self._edge_speeds[self._edge_index()]
+            if self.table.continuous.any() and (self.odometer >= self._next_reroute).any():
+                self._reroute()
+            self.leader, self.follower, self.headway = self._following.compute(
+                self.position, self.lanes
             )
         else:
             self._update_open(v, ids)
@@ -114,45 +145,67 @@ class VehicleKernel:
             self.prev_speed = speed
         self.speed = speed
         self.accel_real = (speed - self.prev_speed) / self.dt
-        has_lead = self.leader >= 0
-        has_fol = self.follower >= 0
-        self.leader_speed = np.where(has_lead, speed[self.leader], speed)
-        self.follower_speed = np.where(has_fol, speed[self.follower], speed)
-        self.follower_headway = np.where(has_fol, self.headway[self.follower], np.inf)
+        if self._following.complete:
+            self.leader_speed = speed[self.leader]
+            self.follower_speed = speed[self.follower]
+            self.follower_headway = self.headway[self.follower]
+        else:
+            has_lead, has_fol = self.leader >= 0, self.follower >= 0
+            self.leader_speed = np.where(has_lead, speed[self.leader], speed)
+            self.follower_speed = np.where(has_fol, speed[self.follower], speed)
+            self.follower_headway = np.where(has_fol, self.headway[self.follower], np.inf)
 
     def _update_open(self, v: Any, ids: list[str]) -> None:
         """Generic path for open networks: edge and lane position straight from SUMO."""
         edges = list(map(v.getRoadID, ids))
-        self.lane_pos = np.array(list(map(v.getLanePosition, ids)), dtype=np.float64)
+        self._lane_pos = np.array(list(map(v.getLanePosition, ids)), dtype=np.float64)
         self.odometer = np.array(list(map(v.getDistance, ids)), dtype=np.float64)
         starts = self.spec.edge_starts
-        self.position = np.array([starts.get(e, math.nan) for e in edges]) + self.lane_pos
+        self.position = np.array([starts.get(e, math.nan) for e in edges]) + self._lane_pos
         self._edges_cache = edges
+        self._stale_edges = False
         self.speed_limit = np.array([self._edge_speed.get(e, math.inf) for e in edges])
         n = len(ids)
         self.leader = np.full(n, -1, dtype=np.int64)
         self.follower = np.full(n, -1, dtype=np.int64)
         self.headway = np.full(n, np.inf)
 
+    def _edge_index(self) -> np.ndarray:
+        return np.searchsorted(self._starts, self.position, side="right") - 1
+
+    def _derive_edges(self) -> None:
+        if self._stale_edges:
+            idx = self._edge_index()
+            self._lane_pos = self.position - self._starts[idx]
+            names = self._edge_ids
+            self._edges_cache = [names[i] for i in idx.tolist()]
+            self._stale_edges = False
+
+    @property
+    def lane_pos(self) -> np.ndarray:
+        """Position of every vehicle on its lane, m."""
+        self._derive_edges()
+        return self._lane_pos
+
     @property
     def edges(self) -> list[str]:
         """Edge id of every vehicle (derived from the ring position on closed networks)."""
-        if self._edges_cache is None:
-            names = self._edge_ids
-            self._edges_cache = [names[i] for i in self._edge_idx.tolist()]
+        self._derive_edges()
+        assert self._edges_cache is not None
         return self._edges_cache
 
-    def _reroute(self, edge_idx: np.ndarray) -> None:
-        """ContinuousRouter: a car that reaches its route's last edge gets the next loop."""
-        due = np.flatnonzero(self.table.continuous & (edge_idx == self._route_last))
+    def _reroute(self) -> None:
+        """ContinuousRouter: a car that reached its route's last edge gets the next loop."""
+        due = np.flatnonzero(self.table.continuous & (self.odometer >= self._next_reroute))
         for i in due.tolist():
             vid = self.table.ids[i]
             edge = self.api.vehicle.getRoadID(vid)  # SUMO's own view at the boundary
             if edge not in self.spec.routes:
                 continue
-            route = self.spec.routes[edge]
-            self.api.vehicle.setRoute(vid, list(route))
-            self._route_last[i] = self._edge_pos[route[-1]]
+            self.api.vehicle.setRoute(vid, list(self.spec.routes[edge]))
+            here = np.array([self._edge_pos[edge]])
+            ahead = self._distance_to_route_end(here, self.position[i : i + 1])
+            self._next_reroute[i] = self.odometer[i] + float(ahead[0])
 
     # ------------------------------------------------------------------ commands
     def apply_acceleration(self, veh_ids: str | Sequence[str], acc: Any) -> None:
@@ -191,9 +244,14 @@ class VehicleKernel:
         cmd = self.accel_cmd
         todo = np.flatnonzero(np.isfinite(cmd))
         if todo.size:
-            target = np.maximum(self.speed[todo] + cmd[todo] * self.dt, 0.0)
-            for i, s in zip(todo.tolist(), target.tolist(), strict=True):
-                v.slowDown(ids[i], s, 1e-3)
+            target = np.maximum(self.speed[todo] + cmd[todo] * self.dt, 0.0).tolist()
+            slow_down = self._fast.slow_down
+            if todo.size == len(ids):
+                for vid, speed in zip(ids, target, strict=True):
+                    slow_down(vid, speed, 1e-3)
+            else:
+                for i, speed in zip(todo.tolist(), target, strict=True):
+                    slow_down(ids[i], speed, 1e-3)
         for i, d in self._lane_change.items():
             lanes = self._num_lanes(self.edges[i])
             target_lane = min(max(int(self.lanes[i]) + d, 0), lanes - 1)
@@ -201,8 +259,7 @@ class VehicleKernel:
                 v.changeLane(ids[i], target_lane, 100000.0)
         for i, route in self._routes.items():
             v.setRoute(ids[i], route)
-            if route[-1] in self._edge_pos:
-                self._route_last[i] = self._edge_pos[route[-1]]
+            self._next_reroute[i] = np.inf  # a user-chosen route is not looped
         self.last_cmd = cmd
         self.accel_cmd = self._no_cmd.copy()
         self._lane_change = {}
