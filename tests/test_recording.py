@@ -40,7 +40,11 @@ def _with_non_finite(frame: VehicleFrame) -> VehicleFrame:
 def _write(path: Path, steps: int = 200, record_every: int = 1, **kwargs: object) -> list:
     pairs = [(_with_non_finite(f), s) for f, s in ring_frames(22, steps)]
     with McapRecorder(
-        path, metadata=META, attachments=ATTACH, record_every=record_every, **kwargs  # type: ignore[arg-type]
+        path,
+        metadata=META,
+        attachments=ATTACH,
+        record_every=record_every,
+        **kwargs,  # type: ignore[arg-type]
     ) as rec:
         for frame, stats in pairs:
             rec.write(frame, stats)
@@ -221,3 +225,21 @@ def test_file_cut_before_any_data_is_an_error(tmp_path: Path) -> None:
     cut.write_bytes(full.read_bytes()[:40])
     with pytest.raises(RecordingError):
         open_log(cut)
+
+
+def test_truncation_at_any_offset_never_crashes(tmp_path: Path) -> None:
+    full = tmp_path / "full.mcap"
+    _write(full, steps=120, chunk_size=15_000)
+    data = full.read_bytes()
+    counts = []
+    for cut_at in np.linspace(9, len(data) - 1, 37).astype(int):
+        cut = tmp_path / f"cut{cut_at}.mcap"
+        cut.write_bytes(data[:cut_at])
+        try:
+            log = open_log(cut)
+        except RecordingError:
+            counts.append(0)  # cut before the first complete chunk: one clear error
+            continue
+        counts.append(len(list(log.frames())))
+        assert log.salvaged
+    assert counts == sorted(counts) and 0 < counts[-1] <= 120

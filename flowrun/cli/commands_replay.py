@@ -93,20 +93,18 @@ def register(app: typer.Typer) -> None:
             typer.Argument(help="One MCAP log, two to compare, or IN OUT with --repair."),
         ],
         start: Annotated[
-            float | None, typer.Option("--from", help="First simulation time to read [s].")
+            float | None, typer.Option("--from", help="First simulation time to read, in seconds.")
         ] = None,
         end: Annotated[
-            float | None, typer.Option("--to", help="Last simulation time to read [s].")
+            float | None, typer.Option("--to", help="Last simulation time to read, in seconds.")
         ] = None,
         vehicles: Annotated[
             str | None, typer.Option("--vehicles", help="Only these vehicle ids: id,id,...")
         ] = None,
-        plot: Annotated[
-            PlotKind | None, typer.Option("--plot", help="Write PNG plots.")
-        ] = None,
+        plot: Annotated[PlotKind | None, typer.Option("--plot", help="Write PNG plots.")] = None,
         out: Annotated[
             Path | None,
-            typer.Option("--out", help="Folder for plots [default: <log folder>/replay]."),
+            typer.Option("--out", help="Folder for plots (default: <log folder>/replay)."),
         ] = None,
         csv: Annotated[
             Path | None, typer.Option("--csv", help="Export Flow emission-style CSV here.")
@@ -148,15 +146,16 @@ def register(app: typer.Typer) -> None:
                 raise RecordingError("--csv and --foxglove work on one log; drop the second log")
             chosen = _parse_vehicles(vehicles)
             opened = [open_log(p) for p in logs]
-            series = [
-                speed_series(lg, start_s=start, end_s=end, vehicles=chosen) for lg in opened
-            ]
+            series = [speed_series(lg, start_s=start, end_s=end, vehicles=chosen) for lg in opened]
             if chosen is not None:
                 seen = set().union(*(s.vehicle_types for s in series))
                 missing = [v for v in chosen if v not in seen]
                 if missing:
-                    typer.secho(f"warning: vehicle id(s) not in the log: {', '.join(missing)}",
-                                err=True, fg=typer.colors.YELLOW)
+                    typer.secho(
+                        f"warning: vehicle id(s) not in the log: {', '.join(missing)}",
+                        err=True,
+                        fg=typer.colors.YELLOW,
+                    )
                 if not seen:
                     raise RecordingError(
                         f"none of --vehicles {vehicles} appears in the selected steps"
@@ -198,10 +197,14 @@ def register(app: typer.Typer) -> None:
                             lg, start_s=start, end_s=end, vehicles=chosen, every=plot_stride(lg)
                         )
                         suffix = "" if len(opened) == 1 else ("_A", "_B")[i]
-                        written.append(plot_time_space(
-                            lg, folder / f"time_space{suffix}.png", data=data))
+                        written.append(
+                            plot_time_space(lg, folder / f"time_space{suffix}.png", data=data)
+                        )
                         if plot is PlotKind.all:
-                            written.append(plot_vehicle_speeds(
-                                lg, folder / f"vehicle_speeds{suffix}.png", data=data))
+                            written.append(
+                                plot_vehicle_speeds(
+                                    lg, folder / f"vehicle_speeds{suffix}.png", data=data
+                                )
+                            )
                 for path in written:
                     typer.echo(f"wrote {path}")

@@ -11,7 +11,7 @@ from typing import Any
 
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
-from flowrun.envs.factory import make_env
+from flowrun.envs.factory import env_class, make_env
 from flowrun.errors import ConfigError
 from flowrun.experiment.metrics import RunMetrics
 from flowrun.experiment.rundir import create_run_dir, versions, write_json
@@ -55,16 +55,22 @@ def resolve_steps(cfg: ExperimentConfig, steps: int | None) -> int:
     return int(cfg.env.horizon)
 
 
-def log_metadata(cfg: ExperimentConfig, seed: int, run: int) -> dict[str, str]:
-    """The MCAP ``flowrun`` metadata record."""
-    meta = {f"version.{k}": v for k, v in versions().items()}
+def log_metadata(
+    cfg: ExperimentConfig, seed: int, run: int, record_every: int = 1
+) -> dict[str, str]:
+    """The MCAP ``flowrun`` metadata record (what ``flowrun replay`` shows and uses)."""
+    found = versions()
+    meta = {f"{name.replace('-', '_')}_version": v for name, v in found.items()}
+    meta["sumo_version"] = found.get("eclipse-sumo", "unknown")
     meta.update(
         {
             "config_name": cfg.name,
             "seed": str(seed),
             "run": str(run),
             "sim_step": repr(cfg.sim.sim_step),
-            "config_yaml": dump_config(cfg),
+            "sims_per_step": str(cfg.env.sims_per_step),
+            "record_every": str(record_every),
+            "config": dump_config(cfg),
         }
     )
     return meta
@@ -95,8 +101,13 @@ def run_baseline(
     n_steps = resolve_steps(cfg, steps)
     seed = int(cfg.sim.seed or 0)
     cfg = replace(cfg, sim=replace(cfg.sim, seed=seed))
+    env_class(cfg)  # a wrong env class or missing additional_params: fail before any file
     run_dir = create_run_dir(out, cfg, seed, argv)
-    env = make_env(cfg, render_mode="rgb_array" if render else None, work_dir=run_dir / "sumo")
+    try:
+        env = make_env(cfg, render_mode="rgb_array" if render else None, work_dir=run_dir / "sumo")
+    except BaseException as err:  # e.g. a user env's __init__: say so in the run folder
+        write_json(run_dir / "metrics.json", {"status": "failed", "error": str(err)})
+        raise
     logs: list[Path] = []
     gif_frames: list[Any] = []
 
@@ -110,7 +121,7 @@ def run_baseline(
             attachments["network.net.xml"] = env.k.net_file.read_bytes()
         return McapRecorder(
             path,
-            metadata=log_metadata(cfg, seed, run),
+            metadata=log_metadata(cfg, seed + run, run, record_every),
             attachments=attachments,
             record_every=record_every,
         )

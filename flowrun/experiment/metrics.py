@@ -19,7 +19,7 @@ class RunMetrics:
     Attributes:
         run: run index.
         steps: simulation steps logged (initial state and warm-up included).
-        duration: simulated time covered, s.
+        duration: simulated time at the last step (SUMO starts at 0), s.
         mean_speed: mean over steps of the mean speed of all vehicles.
         speed_std: mean over steps of the speed standard deviation across vehicles.
         min_speed: lowest speed of any vehicle at any step.
@@ -60,7 +60,7 @@ def summarize_run(run: int, stats: Sequence[StepStats], episode_return: float) -
     return RunMetrics(
         run=run,
         steps=len(stats),
-        duration=float(stats[-1].time - stats[0].time),
+        duration=float(stats[-1].time),
         mean_speed=float(np.mean(mean)),
         speed_std=float(np.mean(std)),
         min_speed=float(min(s.min_speed for s in stats)),

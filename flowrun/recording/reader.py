@@ -126,8 +126,9 @@ class McapLog:
                     end = f.tell()
                     if isinstance(record, Chunk):
                         scan.chunks.append(
-                            _ChunkRef(scan.good_bytes, record.message_start_time,
-                                      record.message_end_time)
+                            _ChunkRef(
+                                scan.good_bytes, record.message_start_time, record.message_end_time
+                            )
                         )
                     elif isinstance(record, Metadata):
                         scan.metadata[record.name] = dict(record.metadata)
@@ -273,6 +274,9 @@ class McapLog:
                 topics=None if topics is None else sorted(topics),
                 starting_at=start_ns,
                 ending_at=end_ns,
+                # log-time order keeps decoding lazy: chunks are read one at a time (the
+                # insert-order queue would decompress every chunk before yielding).
+                log_time_order=True,
             )
 
     def _scanned_messages(
@@ -287,8 +291,12 @@ class McapLog:
                 try:
                     records = self._chunk_records(f, ref)
                 except Exception as err:
-                    log.warning("%s: chunk at byte %d is damaged (%s); stopping there",
-                                self.path, ref.offset, err)
+                    log.warning(
+                        "%s: chunk at byte %d is damaged (%s); stopping there",
+                        self.path,
+                        ref.offset,
+                        err,
+                    )
                     return
                 for rec in records:
                     if isinstance(rec, Schema):
@@ -329,8 +337,11 @@ class McapLog:
         wanted = None if vehicles is None else set(vehicles)
         last_ids: list[str] | None = None
         keep: list[int] | None = None
+        last_roster = -1
         for msg in self.vehicle_messages(start_s, end_s):
-            if wanted is not None:
+            roster = msg.roster_version
+            if wanted is not None and (roster == 0 or roster != last_roster):
+                last_roster = roster
                 ids = list(msg.ids)
                 if ids != last_ids:
                     keep = [i for i, vid in enumerate(ids) if vid in wanted]

@@ -57,6 +57,7 @@ _VEHICLE_FIELDS: tuple[tuple[str, int, bool], ...] = (
     ("headway", _F.TYPE_DOUBLE, True),
     ("leader", _F.TYPE_STRING, True),
     ("is_rl", _F.TYPE_BOOL, True),
+    ("roster_version", _F.TYPE_UINT32, False),
 )
 _STATS_FIELDS: tuple[tuple[str, int, bool], ...] = (
     ("step", _F.TYPE_UINT64, False),
@@ -96,8 +97,14 @@ def schema_data() -> bytes:
     return descriptor_pb2.FileDescriptorSet(file=[_FDP]).SerializeToString()
 
 
-def encode_frame(frame: VehicleFrame) -> bytes:
-    """Serialise a :class:`VehicleFrame` (non-finite floats are kept as they are)."""
+def encode_frame(frame: VehicleFrame, roster_version: int = 0) -> bytes:
+    """Serialise a :class:`VehicleFrame` (non-finite floats are kept as they are).
+
+    Args:
+        frame: the step to encode.
+        roster_version: changes whenever ``ids``/``types``/``is_rl`` change, so readers can
+            skip re-reading those columns (0 = unknown).
+    """
     return bytes(
         VehicleFrameMsg(
             step=frame.step,
@@ -117,6 +124,7 @@ def encode_frame(frame: VehicleFrame) -> bytes:
             headway=np.asarray(frame.headway, dtype=np.float64).tolist(),
             leader=frame.leader,
             is_rl=np.asarray(frame.is_rl).tolist(),
+            roster_version=roster_version,
         ).SerializeToString()
     )
 

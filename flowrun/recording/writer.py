@@ -76,15 +76,15 @@ class McapRecorder:
         self.record_every = int(record_every)
         self.flush_every_s = float(flush_every_s)
         self.frames_written = 0
+        self._roster: tuple[list[str], list[str], list[bool]] = ([], [], [])
+        self._roster_version = 0
         self._closed = False
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._stream: IO[bytes] = open(self.path, "wb")  # noqa: SIM115 - closed in close()
         except OSError as err:
             raise RecordingError(f"cannot create MCAP log {self.path}: {err}") from err
-        self._writer = Writer(
-            self._stream, chunk_size=chunk_size, compression=CompressionType.ZSTD
-        )
+        self._writer = Writer(self._stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
         self._writer.start(profile=PROFILE, library="flowrun")
         meta = {str(k): str(v) for k, v in (metadata or {}).items()}
         self._writer.add_metadata(METADATA_NAME, meta)
@@ -123,10 +123,17 @@ class McapRecorder:
             return False
         stamp = to_ns(frame.time)
         seq = frame.step & 0xFFFFFFFF
+        is_rl = frame.is_rl.tolist()
+        ids, types, rl = self._roster
+        if frame.ids != ids or frame.types != types or is_rl != rl:
+            self._roster = (list(frame.ids), list(frame.types), is_rl)
+            self._roster_version = self._roster_version % 0xFFFFFFFF + 1
         writer = self._writer
         # Stats first: if a crash cuts between the two, every salvaged frame has its stats.
         writer.add_message(self._stats, stamp, schema.encode_stats(stats), stamp, seq)
-        writer.add_message(self._vehicles, stamp, schema.encode_frame(frame), stamp, seq)
+        writer.add_message(
+            self._vehicles, stamp, schema.encode_frame(frame, self._roster_version), stamp, seq
+        )
         self.frames_written += 1
         now = time.monotonic()
         if self.frames_written == 1 or now - self._last_flush >= self.flush_every_s:

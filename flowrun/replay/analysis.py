@@ -68,17 +68,21 @@ def speed_series(
     last_ids: list[str] | None = None
     keep: list[int] | None = None
     nan = math.nan
+    last_roster = -1
     for msg in log.vehicle_messages(start_s, end_s):
-        ids = list(msg.ids)
-        if ids != last_ids:
-            keep = _keep_indices(ids, wanted)
+        roster = msg.roster_version
+        if roster == 0 or roster != last_roster:  # ids/types/is_rl may have changed
+            last_roster = roster
+            ids = list(msg.ids)
             vtypes = list(msg.types)
             is_rl = list(msg.is_rl)
+            if ids != last_ids:
+                keep = _keep_indices(ids, wanted)
+                last_ids = ids
             for i in range(len(ids)) if keep is None else keep:
                 types[ids[i]] = vtypes[i]
                 if is_rl[i]:
                     rl_ids.add(ids[i])
-            last_ids = ids
         speed = np.array(msg.speed, dtype=np.float64)
         if keep is not None:
             speed = speed[keep]
@@ -127,14 +131,18 @@ def time_space_points(
     last_ids: list[str] | None = None
     keep: list[int] | None = None
     id_arr = np.array([], dtype=str)
+    last_roster = -1
     for k, msg in enumerate(log.vehicle_messages(start_s, end_s)):
         if k % every:
             continue
-        ids = list(msg.ids)
-        if ids != last_ids:
-            keep = _keep_indices(ids, wanted)
-            id_arr = np.array(ids if keep is None else [ids[i] for i in keep], dtype=str)
-            last_ids = ids
+        roster = msg.roster_version
+        if roster == 0 or roster != last_roster:
+            last_roster = roster
+            ids = list(msg.ids)
+            if ids != last_ids:
+                keep = _keep_indices(ids, wanted)
+                id_arr = np.array(ids if keep is None else [ids[i] for i in keep], dtype=str)
+                last_ids = ids
         pos = np.array(msg.position, dtype=np.float64)
         speed = np.array(msg.speed, dtype=np.float64)
         rl = np.array(msg.is_rl, dtype=np.bool_)

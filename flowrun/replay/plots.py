@@ -60,15 +60,26 @@ def plot_time_space(
     size = max(0.5, min(6.0, 40_000 / max(ts.times.size, 1)))
     human = ~ts.is_rl
     sc = ax.scatter(
-        ts.times[human], ts.positions[human], c=ts.speeds[human], s=size, cmap="RdYlGn",
-        linewidths=0, rasterized=True,
+        ts.times[human],
+        ts.positions[human],
+        c=ts.speeds[human],
+        s=size,
+        cmap="RdYlGn",
+        linewidths=0,
+        rasterized=True,
         vmin=float(np.nanmin(ts.speeds)) if ts.speeds.size else 0.0,
         vmax=float(np.nanmax(ts.speeds)) if ts.speeds.size else 1.0,
     )
     if ts.is_rl.any():
         ax.scatter(
-            ts.times[ts.is_rl], ts.positions[ts.is_rl], s=max(size, 2.0), color="black",
-            marker="o", linewidths=0, rasterized=True, label="RL vehicle",
+            ts.times[ts.is_rl],
+            ts.positions[ts.is_rl],
+            s=max(size, 2.0),
+            color="black",
+            marker="o",
+            linewidths=0,
+            rasterized=True,
+            label="RL vehicle",
         )
         ax.legend(loc="upper right", markerscale=4)
     fig.colorbar(sc, ax=ax, label="Speed [m/s]")
@@ -90,23 +101,24 @@ def plot_speeds(
     """Mean speed over time with min-max and +-std bands; one overlay per log (1 or 2)."""
     if series is None:
         chosen = None if vehicles is None else list(vehicles)
-        series = [
-            speed_series(lg, start_s=start_s, end_s=end_s, vehicles=chosen) for lg in logs
-        ]
+        series = [speed_series(lg, start_s=start_s, end_s=end_s, vehicles=chosen) for lg in logs]
     fig = Figure(figsize=(10, 5), layout="constrained")
     ax = fig.add_subplot()
     for i, (lg, s) in enumerate(zip(logs, series, strict=True)):
         color = _COLORS[i % len(_COLORS)]
         label = run_label(lg)
         ax.fill_between(s.times, s.min, s.max, color=color, alpha=0.12, linewidth=0)
-        ax.fill_between(s.times, s.mean - s.std, s.mean + s.std, color=color, alpha=0.3,
-                        linewidth=0)
+        ax.fill_between(
+            s.times, s.mean - s.std, s.mean + s.std, color=color, alpha=0.3, linewidth=0
+        )
         ax.plot(s.times, s.mean, color=color, linewidth=1.2, label=f"mean speed, {label}")
     ax.set_xlabel("Time [s]")
     ax.set_ylabel("Speed [m/s]")
     names = " vs ".join(run_label(lg) for lg in logs)
-    ax.set_title(f"Speed over time - {names}\n(dark band: mean +- std across vehicles; "
-                 "light band: min-max)", fontsize="medium")
+    ax.set_title(
+        f"Speed over time - {names}\n(dark band: mean +- std across vehicles; light band: min-max)",
+        fontsize="medium",
+    )
     ax.legend(loc="best", fontsize="small")
     ax.grid(alpha=0.3)
     return _save(fig, out_png)
