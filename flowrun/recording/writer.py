@@ -41,6 +41,9 @@ def to_ns(time_s: float) -> int:
     return round(time_s * 1e9)
 
 
+ROSTER_METADATA = "flowrun_roster"
+
+
 class McapRecorder:
     """Records :class:`VehicleFrame`/:class:`StepStats` pairs to one MCAP file.
 
@@ -152,6 +155,9 @@ class McapRecorder:
             return
         self._closed = True
         try:
+            # How many different rosters (ids/types/RL flags) the frames had: with one, a
+            # reader may take the roster from the first frame and skip decoding the rest.
+            self._writer.add_metadata(ROSTER_METADATA, {"rosters": str(self._roster_version)})
             self._writer.finish()
         finally:
             self._stream.close()

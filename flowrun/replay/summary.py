@@ -10,6 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from flowrun.recording import McapLog
+from flowrun.recording.frames import StepStats
+from flowrun.recording.writer import ROSTER_METADATA
 from flowrun.replay.analysis import SpeedSeries, speed_series
 
 
@@ -102,16 +104,18 @@ def summarize(
         vehicles: restrict the speed numbers to these ids.
         series: a precomputed :func:`speed_series` of the same selection (saves a pass).
     """
+    stats = list(log.stats(start_s, end_s))
+    fixed_roster = log.all_metadata.get(ROSTER_METADATA, {}).get("rosters") == "1"
+    if series is None and vehicles is None and stats and fixed_roster:
+        # The stats topic already holds every step's speed aggregates over all vehicles:
+        # no need to decode the (large) vehicle frames beyond the first one.
+        series = series_from_stats(log, stats, start_s, end_s)
     s = series or speed_series(log, start_s=start_s, end_s=end_s, vehicles=vehicles)
-    collisions = teleports = 0
-    reward_sum = 0.0
-    finite_rewards = 0
-    for st in log.stats(start_s, end_s):
-        collisions += st.collisions
-        teleports += st.teleports
-        if math.isfinite(st.reward):
-            reward_sum += st.reward
-            finite_rewards += 1
+    collisions = sum(st.collisions for st in stats)
+    teleports = sum(st.teleports for st in stats)
+    rewards = [st.reward for st in stats if math.isfinite(st.reward)]
+    reward_sum = float(sum(rewards))
+    finite_rewards = len(rewards)
     meta = log.metadata
     sims_per_step = max(int(meta.get("sims_per_step", "1") or 1), 1)
     record_every = max(int(meta.get("record_every", "1") or 1), 1)
@@ -217,3 +221,32 @@ def compare(
                 delta = f"{vb - va:+.3f}"
         table[label] = (ra.get(label, "-"), rb.get(label, "-"), delta)
     return table
+
+
+def series_from_stats(
+    log: McapLog, stats: list[StepStats], start_s: float | None, end_s: float | None
+) -> SpeedSeries:
+    """All-vehicle :class:`SpeedSeries` from ``/flowrun/stats`` and the first frame's roster."""
+    types: dict[str, str] = {}
+    rl_ids: set[str] = set()
+    for msg in log.vehicle_messages(start_s, end_s):
+        for vid, vtype, rl in zip(msg.ids, msg.types, msg.is_rl, strict=True):
+            types[vid] = vtype
+            if rl:
+                rl_ids.add(vid)
+        break
+    table = np.array(
+        [(st.mean_speed, st.min_speed, st.max_speed, st.speed_std) for st in stats],
+        dtype=np.float64,
+    ).reshape(-1, 4)
+    return SpeedSeries(
+        times=np.array([st.time for st in stats], dtype=np.float64),
+        steps=np.array([st.step for st in stats], dtype=np.int64),
+        mean=table[:, 0],
+        min=table[:, 1],
+        max=table[:, 2],
+        std=table[:, 3],
+        count=np.array([st.num_vehicles for st in stats], dtype=np.int64),
+        vehicle_types=types,
+        rl_ids=frozenset(rl_ids),
+    )
