@@ -125,7 +125,7 @@ class Converter:
             data = {}
         if not isinstance(data, Mapping):
             raise self.loc.error(f"expected a mapping of settings, got {show(data)}", path)
-        fields = {f.name: f for f in dataclasses.fields(cls)}
+        fields = {f.name: f for f in dataclasses.fields(cls) if f.metadata.get("yaml", True)}
         accepted = {name: name for name in fields} | dict(getattr(cls, "YAML_KEYS", {}))
         hints = _hints(cls)
         kwargs: dict[str, Any] = {}

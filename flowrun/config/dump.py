@@ -35,7 +35,9 @@ def dump_config(cfg: ExperimentConfig) -> str:
 
 def _section(obj: Any) -> dict[str, Any]:
     return {
-        yaml_key(type(obj), f.name): _plain(getattr(obj, f.name)) for f in dataclasses.fields(obj)
+        yaml_key(type(obj), f.name): _plain(getattr(obj, f.name))
+        for f in dataclasses.fields(obj)
+        if f.metadata.get("yaml", True)
     }
 
 

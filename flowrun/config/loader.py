@@ -9,6 +9,7 @@ environment is made (config sits below ``flowrun.envs`` and does not import it).
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import os
 import re
@@ -71,7 +72,7 @@ def load_config(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> 
     if "name" not in data:
         data = {"name": file.stem, **data}
     apply_overrides(data, overrides, locations)
-    return _build(data, locations)
+    return dataclasses.replace(_build(data, locations), source=source)
 
 
 def config_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> ExperimentConfig:
@@ -220,4 +221,4 @@ def override_config(cfg: ExperimentConfig, overrides: Sequence[str]) -> Experime
     data = config_to_dict(cfg)
     locations = Locations(f"<config {cfg.name}>")
     apply_overrides(data, overrides, locations)
-    return _build(data, locations)
+    return dataclasses.replace(_build(data, locations), source=cfg.source)

@@ -68,6 +68,9 @@ class ExperimentConfig:
         vehicles: vehicle groups.
         initial: initial placement.
         train: training settings, for ``flowrun train``.
+        source: the YAML file the config was loaded from (``None`` when built in Python). Not a
+            YAML key and not compared: an import-path ``env.class`` is also looked for next to
+            this file.
     """
 
     name: str
@@ -77,3 +80,4 @@ class ExperimentConfig:
     vehicles: VehicleParams = field(default_factory=VehicleParams)
     initial: InitialConfig = field(default_factory=InitialConfig)
     train: TrainConfig | None = None
+    source: str | None = field(default=None, compare=False, metadata={"yaml": False})

@@ -58,7 +58,7 @@ class SumoParams:
     sim_step: float = 0.1
     seed: int | None = None
     render: bool = False
-    teleport_time: float = -1
+    teleport_time: float = -1.0
     use_ballistic: bool = False
     lateral_resolution: float | None = None
     emission_path: str | None = None

@@ -43,10 +43,11 @@ def check_additional_params(cls: type, env_params: EnvParams) -> None:
     declared = getattr(cls, "ADDITIONAL_ENV_PARAMS", {}) or {}
     missing = [k for k in declared if k not in env_params.additional_params]
     if missing:
+        keys = ", ".join(f"'{k}' (default there: {declared[k]!r})" for k in missing)
+        plural = "s" if len(missing) > 1 else ""
         raise ConfigError(
-            f"{cls.__name__} needs env.additional_params {', '.join(repr(k) for k in missing)} "
-            f"(declared in its ADDITIONAL_ENV_PARAMS, defaults: "
-            f"{ {k: declared[k] for k in missing} }); add them to the config",
+            f"missing key{plural} {keys} that {cls.__name__} declares in its "
+            f"ADDITIONAL_ENV_PARAMS; add {'them' if plural else 'it'} to env.additional_params",
             path="env.additional_params",
         )
 
@@ -66,8 +67,12 @@ class Env(gymnasium.Env):
     Episode: ``reset`` restarts SUMO with the initial configuration (perturbation drawn from
     the env's seeded generator) and runs ``warmup_steps`` steps without RL actions. Each
     ``step`` runs ``sims_per_step`` simulation steps. ``terminated`` is true after a
-    collision, ``truncated`` after ``horizon`` steps. ``info`` holds ``mean_speed``,
-    ``collisions``, ``teleports`` and any reward terms in ``reward_terms``.
+    collision, ``truncated`` after ``horizon`` steps. Actions are clipped to a ``Box``
+    action space (``clip_actions``) before they are applied and rewarded. ``info`` holds
+    ``crash``, ``mean_speed``, ``collisions``, ``teleports``, ``time`` and the reward terms in
+    ``reward_terms``. ``step`` raises ``gymnasium.error.ResetNeeded`` before the first
+    ``reset``, after the episode ended, and after another env in this process started its
+    own simulation (libsumo runs one per process).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - gymnasium's
@@ -117,6 +122,7 @@ class Env(gymnasium.Env):
         self._closed = False
         self._step_start = 0
         self._space_cache: tuple[gymnasium.Space[Any], gymnasium.Space[Any]] | None = None
+        self._bounds: tuple[np.ndarray, np.ndarray] | tuple[()] | None = None
 
     # ------------------------------------------------------------------ Flow's hooks
     def _apply_rl_actions(self, rl_actions: Any) -> None:
@@ -174,6 +180,15 @@ class Env(gymnasium.Env):
         """Apply the action for ``sims_per_step`` simulation steps."""
         if self._needs_reset:
             raise gymnasium.error.ResetNeeded("call reset() before step()")
+        if not self.k.started:
+            self._needs_reset = True
+            raise gymnasium.error.ResetNeeded(
+                "this environment's SUMO simulation was stopped because another environment "
+                "started one in this process (libsumo runs one per process); call reset(), "
+                "or run each environment in its own subprocess"
+            )
+        # Flow rewards the action as applied: clipped to the action space when clip_actions.
+        action = None if action is None else self.clip_actions(action)
         crash = False
         for _ in range(self.env_params.sims_per_step):
             self._simulate(action)
@@ -205,7 +220,8 @@ class Env(gymnasium.Env):
                 continue
             accel = c.get_accel(vk.inputs(control.sl, t), self._ctrl_rng)
             vk.apply_acceleration_idx(control.sl, accel)
-        self.apply_rl_actions(action)
+        if action is not None:  # already clipped by ``step``
+            self._apply_rl_actions(action)
         self.additional_command()
         self.k.step()
         self._emit_frame(math.nan)
@@ -225,10 +241,18 @@ class Env(gymnasium.Env):
 
     def clip_actions(self, rl_actions: Any) -> Any:
         """Clip a Box action to the action space when ``env_params.clip_actions``."""
-        space = self._spaces()[0]
-        if self.env_params.clip_actions and isinstance(space, gymnasium.spaces.Box):
-            return np.clip(np.asarray(rl_actions, dtype=np.float64), space.low, space.high)
-        return rl_actions
+        if self._bounds is None:
+            space = self._spaces()[0]
+            clip = self.env_params.clip_actions and isinstance(space, gymnasium.spaces.Box)
+            self._bounds = (
+                (np.asarray(space.low, np.float64), np.asarray(space.high, np.float64))
+                if clip and isinstance(space, gymnasium.spaces.Box)
+                else ()
+            )
+        if not self._bounds:
+            return rl_actions
+        low, high = self._bounds
+        return np.minimum(np.maximum(np.asarray(rl_actions, dtype=np.float64), low), high)
 
     def _format_obs(self, obs: Any) -> Any:
         space = self._spaces()[1]
@@ -240,7 +264,7 @@ class Env(gymnasium.Env):
         speed = self.k.vehicle.speed
         return {
             "crash": crash,
-            "mean_speed": float(speed.mean()) if speed.size else 0.0,
+            "mean_speed": float(speed.sum()) / speed.size if speed.size else 0.0,
             "collisions": self.k.simulation.collisions,
             "teleports": self.k.simulation.teleports,
             "time": self.k.simulation.time,

@@ -12,10 +12,11 @@ from flowrun.config.params import (
     EnvParams,
     InitialConfig,
     NetParams,
+    SumoCarFollowingParams,
     SumoParams,
     VehicleParams,
 )
-from flowrun.envs.base import Env
+from flowrun.envs.base import Env, check_additional_params
 from flowrun.envs.registry import resolve_env_class
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
@@ -28,20 +29,42 @@ def make_network(cfg: ExperimentConfig) -> Network:
     return cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial)
 
 
+def env_class(cfg: ExperimentConfig) -> type[Env]:
+    """The config's environment class, checked against its ``env.additional_params``.
+
+    An import-path class is also looked for next to the config file. Nothing is started.
+
+    Raises:
+        ConfigError: unknown class (with did-you-mean), failed import, or ``additional_params``
+            keys that the class declares in ``ADDITIONAL_ENV_PARAMS`` but the config lacks.
+    """
+    search_dir = Path(cfg.source).resolve().parent if cfg.source else None
+    try:
+        cls: type[Env] = resolve_env_class(cfg.env.env_class, search_dir)
+        check_additional_params(cls, cfg.env)
+    except ConfigError as err:
+        if cfg.source and not err.location:
+            raise ConfigError(err.message, err.path, cfg.source) from None
+        raise
+    return cls
+
+
 def make_env(
     cfg: ExperimentConfig, render_mode: str | None = None, work_dir: Path | None = None
 ) -> Env:
-    """Instantiate the config's environment class on its network."""
-    cls = resolve_env_class(cfg.env.env_class)
+    """Instantiate the config's environment class on its network (see :func:`env_class`)."""
+    cls = env_class(cfg)
     network = make_network(cfg)
-    env = cls(cfg.env, cfg.sim, network, render_mode=render_mode, work_dir=work_dir)
-    if not isinstance(env, Env):  # pragma: no cover - resolve_env_class checks
-        raise ConfigError(f"{cls.__name__} is not a flowrun Env")
-    return env
+    return cls(cfg.env, cfg.sim, network, render_mode=render_mode, work_dir=work_dir)
 
 
 def default_config(env_name: str) -> ExperimentConfig:
-    """The ring experiment each built-in env is registered with (22 cars, 1 AV)."""
+    """The ring experiment each built-in env is registered with.
+
+    As ``configs/ring_wave.yaml`` (Flow's "stabilizing the ring"): 21 IDM drivers with noise
+    0.2 and one AV on a 230 m ring (two lanes and 43 drivers for ``LaneChangeAccelEnv``),
+    3000 steps after a 750-step warm-up; the env's own ``ADDITIONAL_ENV_PARAMS``.
+    """
     cls = resolve_env_class(env_name)
     additional = dict(getattr(cls, "ADDITIONAL_ENV_PARAMS", {}))
     lanes = 2 if env_name == "LaneChangeAccelEnv" else 1
@@ -51,6 +74,8 @@ def default_config(env_name: str) -> ExperimentConfig:
         acceleration_controller=ControllerSpec("RLController"),
         routing_controller=ControllerSpec("ContinuousRouter"),
         num_vehicles=1,
+        # Flow's default: SUMO's safe-speed check caps the AV's commands (no crashes)
+        car_following_params=SumoCarFollowingParams(speed_mode="right_of_way"),
     )
     vehicles.add(
         veh_id="idm",

@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import pkgutil
+import sys
+from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import gymnasium
@@ -27,14 +32,19 @@ def env_names() -> list[str]:
     return sorted(_builtin())
 
 
-def resolve_env_class(name: str | None) -> type:
+def resolve_env_class(name: str | None, search_dir: str | Path | None = None) -> type:
     """The environment class for a built-in name or an import path ``package.module:Class``.
+
+    Args:
+        name: a built-in env name (``WaveAttenuationPOEnv``) or ``package.module:Class``;
+            ``None`` means ``AccelEnv``.
+        search_dir: a folder to import the package from when it is not importable already
+            (the config file's folder): it is appended to ``sys.path``, so an installed
+            package of the same name wins.
 
     Raises:
         ConfigError: unknown name or failed import (with did-you-mean).
     """
-    from flowrun.envs.base import Env
-
     if name is None:
         name = "AccelEnv"
     builtin = _builtin()
@@ -47,19 +57,72 @@ def resolve_env_class(name: str | None) -> type:
             )
         return builtin[name]
     module_name, _, attr = name.partition(":")
+    module = _import(module_name, name, None if search_dir is None else Path(search_dir))
+    return _env_class(module, module_name, attr, name)
+
+
+def _import(module_name: str, name: str, search_dir: Path | None) -> ModuleType:
+    """Import ``module_name``, from ``search_dir`` too when it holds the top-level package."""
+    top = module_name.split(".")[0]
     try:
-        module = importlib.import_module(module_name)
+        return importlib.import_module(module_name)
+    except ModuleNotFoundError as err:
+        here = search_dir is not None and (
+            (search_dir / top).is_dir() or (search_dir / f"{top}.py").is_file()
+        )
+        if err.name != top or not here:
+            raise _import_error(module_name, name, err, search_dir) from err
+    if str(search_dir) not in sys.path:
+        sys.path.append(str(search_dir))
+    importlib.invalidate_caches()
+    try:
+        return importlib.import_module(module_name)
     except ImportError as err:
-        raise ConfigError(
-            f"cannot import module '{module_name}' for environment '{name}': {err}; make sure "
-            "the package is installed or its folder is on PYTHONPATH",
-            path="env.class",
-        ) from err
+        raise _import_error(module_name, name, err, search_dir) from err
+
+
+def _import_error(
+    module_name: str, name: str, err: ImportError, search_dir: Path | None
+) -> ConfigError:
+    missing = getattr(err, "name", None) or ""
+    parent = missing.rpartition(".")[0]
+    hint = ""
+    if missing and module_name.startswith(missing):
+        # The module itself (not one of its imports) is missing: suggest a sibling module.
+        places: list[str] = []
+        if parent:
+            with contextlib.suppress(ImportError):
+                places = list(getattr(importlib.import_module(parent), "__path__", []))
+        elif search_dir is not None:
+            places = [str(search_dir)]
+        prefix = f"{parent}." if parent else ""
+        names = [prefix + m.name for m in pkgutil.iter_modules(places)]
+        hint = did_you_mean(missing, names) if names else ""
+    where = f" (looked in {search_dir} too)" if search_dir is not None else ""
+    return ConfigError(
+        f"cannot import module '{module_name}' for environment '{name}': {err}{hint}{where}; "
+        "put the package next to the config file, install it, or add its folder to PYTHONPATH",
+        path="env.class",
+    )
+
+
+def _env_class(module: ModuleType, module_name: str, attr: str, name: str) -> type:
+    from flowrun.envs.base import Env
+
     obj: Any = getattr(module, attr, None)
     if obj is None:
-        public = [n for n in dir(module) if not n.startswith("_")]
+        envs = [  # classes defined here under their own name (no aliases or imports)
+            n
+            for n, v in vars(module).items()
+            if isinstance(v, type)
+            and issubclass(v, Env)
+            and v.__module__ == module.__name__
+            and v.__name__ == n
+        ]
+        public = envs or [n for n in dir(module) if not n.startswith("_")]
+        listed = f"; it defines {', '.join(sorted(envs))}" if envs else ""
         raise ConfigError(
-            f"module '{module_name}' has no class '{attr}'{did_you_mean(attr, public)}",
+            f"module '{module_name}' has no class '{attr}'{did_you_mean(attr, public)}{listed}",
             path="env.class",
         )
     if not (isinstance(obj, type) and issubclass(obj, Env)):

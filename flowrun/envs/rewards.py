@@ -34,11 +34,12 @@ def wave_attenuation_terms(
     Returns:
         ``{"speed": ..., "accel_penalty": ...}``; both 0 after a collision.
     """
-    if fail or speeds.size == 0 or np.any(speeds < -100):
+    if fail or speeds.size == 0 or speeds.min() < -100:
         return {"speed": 0.0, "accel_penalty": 0.0}
-    speed_term = 4.0 * float(np.mean(speeds)) / 20.0
+    speed_term = 4.0 * (float(speeds.sum()) / speeds.size) / 20.0
     penalty = 0.0
     if rl_actions is not None and np.size(rl_actions):
-        mean_abs = float(np.mean(np.abs(np.asarray(rl_actions, dtype=np.float64))))
+        actions = np.abs(np.asarray(rl_actions, dtype=np.float64))
+        mean_abs = float(actions.sum()) / actions.size
         penalty = -4.0 * mean_abs if mean_abs > 0 else 0.0
     return {"speed": speed_term, "accel_penalty": penalty}

@@ -1,7 +1,8 @@
 """Starting and stopping SUMO: the one place that imports ``libsumo`` (and ``traci`` for a GUI).
 
 libsumo runs one simulation per process and a second ``start`` silently replaces the first,
-so a process-wide guard refuses to run two :class:`SumoProcess` objects at once.
+so a process-wide guard closes the running :class:`SumoProcess` (with a warning) before another
+starts; the displaced owner sees ``api is None`` and must start again (an env: ``reset()``).
 """
 
 from __future__ import annotations
@@ -100,11 +101,13 @@ class SumoProcess:
         """Start the simulation and return the API module (``libsumo`` or ``traci``)."""
         if self.api is not None:
             return self.api
-        if _ACTIVE:
-            raise SimulationError(
-                "a libsumo simulation is already running in this process; libsumo allows one "
-                "per process: close the other environment first, or use subprocess envs"
+        for other in list(_ACTIVE):
+            log.warning(
+                "a SUMO simulation is already running in this process; stopping it to start "
+                "another (libsumo allows one per process: use one subprocess per environment "
+                "to run several at once)"
             )
+            other.close()
         module: ModuleType
         if self.gui:
             import traci

@@ -133,6 +133,10 @@ class RingNetwork(Network):
         return StartPositions(edges, lane_pos, lanes)
 
 
+#: Flow < 0.5 name of the ring (``flow.scenarios.loop.LoopScenario``).
+LoopScenario = RingNetwork
+
+
 def check_ring_params(params: dict[str, Any]) -> None:
     """Raise :class:`ConfigError` for a ring that cannot exist."""
     for key in ("length", "speed_limit"):

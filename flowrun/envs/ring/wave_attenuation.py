@@ -21,7 +21,7 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     "max_accel": 1,
     # maximum deceleration of the AV, m/s^2
     "max_decel": 1,
-    # range the ring length is drawn from at each reset, m
+    # range the ring length is drawn from at each reset, m (null: keep the network's length)
     "ring_length": [220, 270],
 }
 
@@ -39,20 +39,33 @@ class WaveAttenuationEnv(Env):
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
-    def ring_range(self) -> tuple[int, int]:
-        """``(low, high)`` of the ring length draw, m."""
-        low, high = self.env_params.additional_params["ring_length"]
-        if not 0 < low <= high:
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.ring_range()  # a bad ring_length fails here, not at the first reset
+
+    def ring_range(self) -> tuple[int, int] | None:
+        """``(low, high)`` of the ring length draw, m; ``None`` keeps the network's length."""
+        given = self.env_params.additional_params["ring_length"]
+        if given is None:
+            return None
+        try:
+            low, high = given
+            ok = 0 < low <= high
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
             raise ConfigError(
-                f"ring_length must be [low, high] with 0 < low <= high, got {[low, high]}",
+                f"expected [low, high] with 0 < low <= high (metres) or null, got {given!r}",
                 path="env.additional_params.ring_length",
             )
         return int(low), int(high)
 
     def episode_network(self) -> Network:
         """The ring with a length drawn uniformly from the integers in ``ring_length``."""
-        low, high = self.ring_range()
-        length = int(self.np_random.integers(low, high + 1))
+        bounds = self.ring_range()
+        if bounds is None:
+            return self.initial_network
+        length = int(self.np_random.integers(bounds[0], bounds[1] + 1))
         return self.initial_network.with_params(length=length)
 
     @property
@@ -96,7 +109,8 @@ class WaveAttenuationPOEnv(WaveAttenuationEnv):
     """Partially observed ring (Flow's ``WaveAttenuationPOEnv``): the AV sees itself and its leader.
 
     Observation (3 values): AV speed / 15, (leader speed - AV speed) / 15, and the gap to the
-    leader's front bumper ``(x_lead - x_av) mod L`` divided by the largest ring length.
+    leader's front bumper ``(x_lead - x_av) mod L`` divided by the largest ring length (the
+    ring's own length when ``ring_length`` is null).
     Action, reward, termination: as :class:`WaveAttenuationEnv` (one RL car expected).
     """
 
@@ -113,7 +127,8 @@ class WaveAttenuationPOEnv(WaveAttenuationEnv):
             return np.zeros(3)
         rl = rl_ids[0]
         lead = vk.get_leader(rl) or rl
-        max_length = float(self.ring_range()[1])
+        bounds = self.ring_range()
+        max_length = float(bounds[1]) if bounds is not None else self.k.network.length()
         gap = (vk.get_x_by_id(lead) - vk.get_x_by_id(rl)) % self.k.network.length()
         return np.array(
             [

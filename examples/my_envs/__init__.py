@@ -1,0 +1,5 @@
+"""An example package holding a custom flowrun environment (see ``docs/environments.md``).
+
+Load it from a config with ``env: {class: "my_envs.envs:MyEnv"}``; flowrun finds the package
+next to the config file (``examples/custom_env.yaml``), on ``PYTHONPATH`` or installed.
+"""
