@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import signal
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any
@@ -47,6 +47,34 @@ def sigterm_as_interrupt() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+@contextmanager
+def interrupt_between_steps() -> Iterator[Callable[[], None]]:
+    """Ctrl-C/SIGTERM stop the run at the next step boundary (a second signal stops at once).
+
+    Yields a ``check()`` to call between steps: it raises ``KeyboardInterrupt`` once a signal
+    came. Raising from inside the signal handler could land in the middle of writing the log
+    (the mcap writer compressing a chunk) and silently drop that chunk's steps.
+    """
+    requested = False
+
+    def handler(signum: int, frame: Any) -> None:
+        nonlocal requested
+        if requested:
+            raise KeyboardInterrupt
+        requested = True
+
+    def check() -> None:
+        if requested:
+            raise KeyboardInterrupt
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield check
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
 
 
 def metrics_table(title: str, rows: list[Any]) -> Table:
@@ -110,10 +138,12 @@ def baseline(
     ) as bar:
         task = bar.add_task("baseline", total=total * runs, run=0)
 
-        def progress(run: int, step: int) -> None:
-            bar.update(task, completed=run * total + step, run=run)
+        with interrupt_between_steps() as check_stop:
 
-        with sigterm_as_interrupt():
+            def progress(run: int, step: int) -> None:
+                bar.update(task, completed=run * total + step, run=run)
+                check_stop()
+
             try:
                 result = run_baseline(
                     cfg,

@@ -244,7 +244,11 @@ class VehicleKernel:
         cmd = self.accel_cmd
         todo = np.flatnonzero(np.isfinite(cmd))
         if todo.size:
-            target = np.maximum(self.speed[todo] + cmd[todo] * self.dt, 0.0).tolist()
+            # Flow's rule (v + a*dt), never below 0 nor above the lane's speed limit (with
+            # speedMode 0 SUMO would let a commanded car exceed the limit).
+            target = np.minimum(
+                np.maximum(self.speed[todo] + cmd[todo] * self.dt, 0.0), self.speed_limit[todo]
+            ).tolist()
             slow_down = self._fast.slow_down
             if todo.size == len(ids):
                 for vid, speed in zip(ids, target, strict=True):

@@ -1,0 +1,196 @@
+"""The kernel: who follows whom on a ring (pure), and the SUMO-backed getters and commands."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from flowrun.envs.factory import make_env
+from flowrun.errors import ConfigError
+from flowrun.kernel.snapshot import leaders_on_ring
+
+INF = math.inf
+
+
+def ring(
+    position: list[float], lanes: list[int] | None = None, length: float = 100.0, car: float = 5.0
+) -> tuple[list[int], list[int], list[float]]:
+    n = len(position)
+    leader, follower, headway = leaders_on_ring(
+        np.array(position, dtype=float),
+        np.array(lanes if lanes is not None else [0] * n, dtype=np.int64),
+        np.full(n, car),
+        length,
+    )
+    return leader.tolist(), follower.tolist(), headway.tolist()
+
+
+# --- leaders_on_ring (pure) ----------------------------------------------------------------
+
+
+def test_leaders_follow_position_order_not_index_order() -> None:
+    # positions 50, 10, 30 on a 100 m ring: 1 -> 2 -> 0 -> 1 (wrapping)
+    leader, follower, headway = ring([50.0, 10.0, 30.0])
+    assert leader == [1, 2, 0]
+    assert follower == [2, 0, 1]
+    # gaps: 0->1 wraps: (10 - 50) mod 100 - 5 = 55; 1->2: 20 - 5; 2->0: 20 - 5
+    assert headway == pytest.approx([55.0, 15.0, 15.0])
+
+
+def test_leader_of_the_front_car_wraps_around_the_ring() -> None:
+    leader, _, headway = ring([98.0, 3.0], length=100.0, car=4.0)
+    assert leader == [1, 0]
+    # 98 -> 3 across the ring end: 5 m between front bumpers, minus the leader's 4 m
+    assert headway == pytest.approx([1.0, 91.0])
+
+
+def test_single_car_has_no_leader_and_infinite_headway() -> None:
+    leader, follower, headway = ring([42.0])
+    assert leader == [-1]
+    assert follower == [-1]
+    assert headway == [INF]
+
+
+def test_no_cars_gives_empty_arrays() -> None:
+    assert ring([]) == ([], [], [])
+
+
+def test_lanes_are_independent_rings() -> None:
+    # lane 0: cars 0 (10 m), 2 (60 m); lane 1: cars 1 (20 m), 3 (40 m); car 4 alone in lane 2
+    leader, follower, headway = ring([10.0, 20.0, 60.0, 40.0, 0.0], lanes=[0, 1, 0, 1, 2])
+    assert leader == [2, 3, 0, 1, -1]
+    assert follower == [2, 3, 0, 1, -1]
+    assert headway == pytest.approx([45.0, 15.0, 45.0, 75.0, INF])
+
+
+def test_lengths_of_the_leader_not_the_ego_are_subtracted() -> None:
+    leader, _, headway = leaders_on_ring(
+        np.array([0.0, 20.0]), np.zeros(2, dtype=np.int64), np.array([3.0, 7.0]), 100.0
+    )
+    assert leader.tolist() == [1, 0]
+    assert headway.tolist() == pytest.approx([20.0 - 7.0, 80.0 - 3.0])
+
+
+# --- getters against raw libsumo -----------------------------------------------------------
+
+
+def ring_gap(a: float, b: float, length: float) -> float:
+    """Smallest distance between two ring positions (m)."""
+    return abs((a - b + length / 2) % length - length / 2)
+
+
+@pytest.mark.sumo
+def test_getters_agree_with_raw_libsumo(config: Any) -> None:
+    env = make_env(config("sugiyama"))
+    try:
+        env.reset(seed=0)
+        api = env.k.process.api  # the libsumo module of this simulation
+        starts = env.k.network.total_edgestarts_dict
+        vk = env.k.vehicle
+        checked = 0
+        for step in range(1, 901):
+            env.step(None)
+            if step % 150:
+                continue
+            for vid in vk.get_ids():
+                edge = api.vehicle.getRoadID(vid)
+                x = starts[edge] + api.vehicle.getLanePosition(vid)
+                assert ring_gap(vk.get_x_by_id(vid), x, env.k.network.length()) < 1e-9
+                assert vk.get_edge(vid) == edge
+                assert vk.get_position(vid) == pytest.approx(
+                    api.vehicle.getLanePosition(vid), abs=1e-9
+                )
+                assert vk.get_speed(vid) == api.vehicle.getSpeed(vid)
+                assert vk.get_lane(vid) == api.vehicle.getLaneIndex(vid)
+                found = api.vehicle.getLeader(vid, 1000.0)
+                assert found is not None and found[0], vid  # everyone has a leader on a ring
+                lead_id, gap = found
+                assert vk.get_leader(vid) == lead_id
+                assert vk.get_follower(lead_id) == vid
+                assert vk.get_headway(vid) == pytest.approx(
+                    gap + api.vehicle.getMinGap(vid), abs=1e-9
+                )
+                checked += 1
+        assert checked == 6 * 22
+        assert min(vk.get_headway(vk.get_ids())) < 5.0  # checked while cars were close
+    finally:
+        env.close()
+
+
+@pytest.mark.sumo
+def test_continuous_router_keeps_cars_circling_for_5000_steps(config: Any) -> None:
+    # 4 cars on a short ring lap it dozens of times; a length that is not a multiple of
+    # 0.04 m also checks that SUMO's lanes add up to the ring exactly (no drift per lap).
+    length = 230.3
+    env = make_env(
+        config("sugiyama", "vehicles[0].count=4", f"network.length={length}", "env.horizon=5000")
+    )
+    try:
+        env.reset(seed=0)
+        api = env.k.process.api
+        for _ in range(5000):
+            env.step(None)
+            assert api.vehicle.getIDCount() == 4
+        vk = env.k.vehicle
+        assert min(vk.get_distance(v) for v in vk.get_ids()) > 40 * length
+        starts = env.k.network.total_edgestarts_dict
+        for vid in vk.get_ids():
+            x = starts[api.vehicle.getRoadID(vid)] + api.vehicle.getLanePosition(vid)
+            assert ring_gap(vk.get_x_by_id(vid), x, length) < 1e-6
+        assert env.k.simulation.collisions == 0
+    finally:
+        env.close()
+
+
+@pytest.mark.sumo
+def test_collision_is_counted_and_terminates_the_episode(config: Any) -> None:
+    env = make_env(config("sugiyama"))
+    try:
+        env.reset(seed=0)
+        vk = env.k.vehicle
+        victim = vk.get_ids()[0]
+        # after the IDM controller, every step: ram the car ahead (speed mode aggressive)
+        env.additional_command = lambda: vk.apply_acceleration(victim, 20.0)  # type: ignore[method-assign]
+        terminated = False
+        for _ in range(100):
+            _, _, terminated, _, info = env.step(None)
+            if terminated:
+                break
+        assert terminated
+        assert info["collisions"] > 0
+        assert victim in env.k.simulation.colliding_ids
+    finally:
+        env.close()
+
+
+# --- configuration errors and rendering ----------------------------------------------------
+
+
+def test_too_many_cars_for_the_ring_is_a_config_error(config: Any) -> None:
+    with pytest.raises(ConfigError, match="ring") as err:
+        config("sugiyama", "vehicles[0].count=40")
+    assert "network.length" in str(err.value)
+
+
+@pytest.mark.sumo
+def test_render_rgb_array_draws_the_ring_and_cars(config: Any) -> None:
+    env = make_env(config("sugiyama"), render_mode="rgb_array")
+    try:
+        env.reset(seed=0)
+        for _ in range(50):
+            env.step(None)
+        img = env.render()
+    finally:
+        env.close()
+    assert isinstance(img, np.ndarray)
+    assert img.shape == (400, 400, 3)
+    assert img.dtype == np.uint8
+    pixels = img.reshape(-1, 3)
+    background = np.all(pixels == (245, 245, 245), axis=1)
+    road = np.all(pixels == (90, 90, 90), axis=1)
+    assert road.sum() > 1000
+    cars = ~background & ~road & (pixels[:, 0] > 150)  # red-to-green speed colours
+    assert cars.sum() > 22 * 10
