@@ -9,7 +9,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from flowrun.envs.base import Env
-from flowrun.experiment.metrics import RunMetrics, summarize_run
+from flowrun.experiment.metrics import RunAccumulator, RunMetrics
 from flowrun.recording.frames import StepStats, VehicleFrame
 
 log = logging.getLogger(__name__)
@@ -79,7 +79,7 @@ class Experiment:
         env.record_frames = self.sink_factory is not None
         for run in range(num_runs):
             sink: FrameSink | None = None
-            stats: list[StepStats] = []
+            stats = RunAccumulator()
             ret = 0.0
             rewards: list[float] = []
             try:
@@ -99,7 +99,7 @@ class Experiment:
             finally:
                 if sink is not None:
                     sink.close()
-                self.metrics.append(summarize_run(run, stats, ret))
+                self.metrics.append(stats.result(run, ret))
             returns.append(ret)
             per_step.append(rewards)
         velocities = [m.mean_speed for m in self.metrics]
@@ -112,9 +112,9 @@ class Experiment:
             "metrics": list(self.metrics),
         }
 
-    def _drain(self, sink: FrameSink | None, stats: list[StepStats]) -> None:
+    def _drain(self, sink: FrameSink | None, stats: RunAccumulator) -> None:
         for frame, step_stats in self.env.frames:
-            stats.append(step_stats)
+            stats.add(step_stats)
             if sink is not None and frame is not None:
                 sink.write(frame, step_stats)
         self.env.frames = []
