@@ -8,6 +8,7 @@ import numpy as np
 import numpy.typing as npt
 
 FloatArray = npt.NDArray[np.float64]
+FLOAT32_EPS = float(np.finfo(np.float32).eps)
 
 
 def desired_velocity(speeds: FloatArray, target_velocity: float, fail: bool = False) -> float:
@@ -17,13 +18,12 @@ def desired_velocity(speeds: FloatArray, target_velocity: float, fail: bool = Fa
     ``t`` the target vector; 0 after a collision or with no vehicles.
     """
     n = speeds.size
-    if fail or n == 0 or np.any(speeds < -100):
+    if fail or n == 0:
         return 0.0
-    max_cost = abs(target_velocity) * float(np.sqrt(n))
+    max_cost = abs(target_velocity) * math.sqrt(n)
     diff = speeds - target_velocity
-    cost = math.sqrt(float(np.dot(diff, diff)))
-    eps = float(np.finfo(np.float32).eps)
-    return max(max_cost - cost, 0.0) / (max_cost + eps)
+    cost = math.sqrt(float(diff.dot(diff)))
+    return max(max_cost - cost, 0.0) / (max_cost + FLOAT32_EPS)
 
 
 def wave_attenuation_terms(

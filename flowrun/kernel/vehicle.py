@@ -242,20 +242,21 @@ class VehicleKernel:
         v = self.api.vehicle
         ids = self.table.ids
         cmd = self.accel_cmd
-        todo = np.flatnonzero(np.isfinite(cmd))
-        if todo.size:
-            # Flow's rule (v + a*dt), never below 0 nor above the lane's speed limit (with
-            # speedMode 0 SUMO would let a commanded car exceed the limit).
+        finite = np.isfinite(cmd)
+        slow_down = self._fast.slow_down
+        # Flow's rule (v + a*dt), never below 0 nor above the lane's speed limit (with
+        # speedMode 0 SUMO would let a commanded car exceed the limit).
+        if finite.all():  # the common case: every car commanded, no fancy indexing
+            target = np.minimum(np.maximum(self.speed + cmd * self.dt, 0.0), self.speed_limit)
+            for vid, speed in zip(ids, target.tolist(), strict=True):
+                slow_down(vid, speed, 1e-3)
+        elif finite.any():
+            todo = np.flatnonzero(finite)
             target = np.minimum(
                 np.maximum(self.speed[todo] + cmd[todo] * self.dt, 0.0), self.speed_limit[todo]
-            ).tolist()
-            slow_down = self._fast.slow_down
-            if todo.size == len(ids):
-                for vid, speed in zip(ids, target, strict=True):
-                    slow_down(vid, speed, 1e-3)
-            else:
-                for i, speed in zip(todo.tolist(), target, strict=True):
-                    slow_down(ids[i], speed, 1e-3)
+            )
+            for i, speed in zip(todo.tolist(), target.tolist(), strict=True):
+                slow_down(ids[i], speed, 1e-3)
         for i, d in self._lane_change.items():
             lanes = self._num_lanes(self.edges[i])
             target_lane = min(max(int(self.lanes[i]) + d, 0), lanes - 1)
