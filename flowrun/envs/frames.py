@@ -11,28 +11,30 @@ from flowrun.recording.frames import StepStats, VehicleFrame
 
 
 def snapshot_frame(k: Kernel, step: int) -> VehicleFrame:
-    """Every vehicle's state at the current step, as a :class:`VehicleFrame`."""
+    """Every vehicle's state at the current step, as a :class:`VehicleFrame`.
+
+    The arrays are the kernel's own: it replaces them every step instead of writing into them,
+    so a frame stays valid without copies (treat it as read-only).
+    """
     vk = k.vehicle
-    ids = vk.table.ids
-    leader = [ids[j] if j >= 0 else "" for j in vk.leader.tolist()]
     return VehicleFrame(
         step=step,
         time=k.simulation.time,
-        ids=list(ids),
-        types=list(vk.table.types),
-        edges=list(vk.edges),
-        lanes=vk.lanes.copy(),
-        lane_pos=vk.lane_pos.copy(),
-        position=vk.position.copy(),
-        odometer=vk.odometer.copy(),
-        x=vk.x.copy(),
-        y=vk.y.copy(),
-        speed=vk.speed.copy(),
-        accel_cmd=vk.last_cmd.copy(),
-        accel_real=vk.accel_real.copy(),
-        headway=vk.headway.copy(),
-        leader=leader,
-        is_rl=vk.table.is_rl.copy(),
+        ids=vk.table.ids,
+        types=vk.table.types,
+        edges=vk.edges,
+        lanes=vk.lanes,
+        lane_pos=vk.lane_pos,
+        position=vk.position,
+        odometer=vk.odometer,
+        x=vk.x,
+        y=vk.y,
+        speed=vk.speed,
+        accel_cmd=vk.last_cmd,
+        accel_real=vk.accel_real,
+        headway=vk.headway,
+        leader=vk.leader_ids(),
+        is_rl=vk.table.is_rl,
     )
 
 

@@ -29,6 +29,7 @@ class FastCalls:
 
     get_speed: Callable[[str], float]
     get_distance: Callable[[str], float]
+    get_position: Callable[[str], tuple[float, float]]
     slow_down: Callable[[str, float, float], None]
 
     @staticmethod
@@ -36,9 +37,14 @@ class FastCalls:
         """The fastest equivalent calls of ``api`` (``libsumo`` or ``traci``)."""
         raw = getattr(api, "_libsumo", None)
         if raw is not None and hasattr(raw, "vehicle_getSpeed"):
-            return FastCalls(raw.vehicle_getSpeed, raw.vehicle_getDistance, raw.vehicle_slowDown)
+            return FastCalls(
+                raw.vehicle_getSpeed,
+                raw.vehicle_getDistance,
+                raw.vehicle_getPosition,
+                raw.vehicle_slowDown,
+            )
         v = api.vehicle
-        return FastCalls(v.getSpeed, v.getDistance, v.slowDown)
+        return FastCalls(v.getSpeed, v.getDistance, v.getPosition, v.slowDown)
 
 
 class VehicleKernel:
@@ -60,6 +66,7 @@ class VehicleKernel:
         self._index = {vid: i for i, vid in enumerate(table.ids)}
         self._edges_cache: list[str] | None = [""] * n
         self._lane_pos = np.zeros(n)
+        self._leader_ids: tuple[np.ndarray | None, list[str]] = (None, [])
         self._stale_edges = False
         self._next_reroute = np.full(n, np.inf)
         self.leader_speed = np.zeros(n)
@@ -126,7 +133,7 @@ class VehicleKernel:
         if self._multi_lane:
             self.lanes = np.array(list(map(v.getLaneIndex, ids)), dtype=np.int64)
         if self.read_xy:
-            xy = np.array(list(map(v.getPosition, ids)), dtype=np.float64).reshape(-1, 2)
+            xy = np.array(list(map(fast.get_position, ids)), dtype=np.float64).reshape(-1, 2)
             self.x, self.y = xy[:, 0], xy[:, 1]
         if self.spec.closed:
             self.odometer = np.array(list(map(fast.get_distance, ids)), dtype=np.float64)
@@ -366,6 +373,16 @@ class VehicleKernel:
         """Id of the vehicle ahead in the same lane, or ``None``."""
         j = int(self.leader[self._index[veh_id]])
         return self.table.ids[j] if j >= 0 else None
+
+    def leader_ids(self) -> list[str]:
+        """Leader id of every vehicle (``""`` without leader); reused while the order holds."""
+        if self._leader_ids[0] is not self.leader:
+            ids = self.table.ids
+            self._leader_ids = (
+                self.leader,
+                [ids[j] if j >= 0 else "" for j in self.leader.tolist()],
+            )
+        return self._leader_ids[1]
 
     def get_follower(self, veh_id: str) -> str | None:
         """Id of the vehicle behind in the same lane, or ``None``."""
