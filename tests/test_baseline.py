@@ -55,7 +55,10 @@ def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_run_folder_holds_config_command_versions_metrics_and_log(run_dir: Path) -> None:
     assert run_dir.parent.name == "sugiyama"
     assert run_dir.name.endswith("-0")  # <timestamp>-<seed>
-    assert load_config(run_dir / "config.yaml") == load_config(SUGIYAMA)
+    # The resolved config: the file's, with the horizon set by --steps.
+    saved = load_config(run_dir / "config.yaml")
+    assert saved == load_config(SUGIYAMA, [f"env.horizon={STEPS}"])
+    assert saved.env.horizon == STEPS
     assert (run_dir / "command.txt").read_text().strip()
     versions = json.loads((run_dir / "versions.json").read_text())
     assert {"python", "flowrun", "libsumo", "eclipse-sumo"} <= set(versions)

@@ -100,7 +100,8 @@ def run_baseline(
         raise ConfigError(f"--record-every must be >= 1, got {record_every}")
     n_steps = resolve_steps(cfg, steps)
     seed = int(cfg.sim.seed or 0)
-    cfg = replace(cfg, sim=replace(cfg.sim, seed=seed))
+    # ``--steps`` is the episode length: the horizon follows it (and the saved config says so).
+    cfg = replace(cfg, sim=replace(cfg.sim, seed=seed), env=replace(cfg.env, horizon=n_steps))
     env_class(cfg)  # a wrong env class or missing additional_params: fail before any file
     run_dir = create_run_dir(out, cfg, seed, argv)
     try:
