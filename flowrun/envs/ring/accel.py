@@ -22,6 +22,16 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
 }
 
 
+def acceleration_box(additional_params: dict[str, Any], num_rl: int) -> Box:
+    """One acceleration per RL car in ``[-|max_decel|, max_accel]`` m/s^2."""
+    return Box(
+        low=-abs(float(additional_params["max_decel"])),
+        high=float(additional_params["max_accel"]),
+        shape=(num_rl,),
+        dtype=np.float32,
+    )
+
+
 class AccelEnv(Env):
     """Fully observed ring with accelerations for the RL cars (Flow's ``AccelEnv``).
 
@@ -37,12 +47,8 @@ class AccelEnv(Env):
     @property
     def action_space(self) -> Box:  # type: ignore[override]
         """One acceleration per RL vehicle."""
-        p = self.env_params.additional_params
-        return Box(
-            low=-abs(float(p["max_decel"])),
-            high=float(p["max_accel"]),
-            shape=(self.initial_vehicles.num_rl_vehicles,),
-            dtype=np.float32,
+        return acceleration_box(
+            self.env_params.additional_params, self.initial_vehicles.num_rl_vehicles
         )
 
     @property

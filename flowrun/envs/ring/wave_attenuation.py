@@ -13,6 +13,7 @@ from gymnasium.spaces import Box
 
 from flowrun.envs.base import Env
 from flowrun.envs.rewards import wave_attenuation_terms
+from flowrun.envs.ring.accel import acceleration_box
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
 
@@ -71,12 +72,8 @@ class WaveAttenuationEnv(Env):
     @property
     def action_space(self) -> Box:  # type: ignore[override]
         """One acceleration per RL vehicle."""
-        p = self.env_params.additional_params
-        return Box(
-            low=-abs(float(p["max_decel"])),
-            high=float(p["max_accel"]),
-            shape=(self.initial_vehicles.num_rl_vehicles,),
-            dtype=np.float32,
+        return acceleration_box(
+            self.env_params.additional_params, self.initial_vehicles.num_rl_vehicles
         )
 
     @property
