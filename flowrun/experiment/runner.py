@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+from array import array
 from collections.abc import Callable
 from typing import Any, Protocol
 
@@ -81,7 +82,7 @@ class Experiment:
             sink: FrameSink | None = None
             stats = RunAccumulator()
             ret = 0.0
-            rewards: list[float] = []
+            rewards = array("d")  # 8 bytes a step: memory stays flat over long runs
             try:
                 obs, _ = env.reset(seed=None if seed is None else seed + run)
                 sink = self.sink_factory(run) if self.sink_factory else None
@@ -101,7 +102,7 @@ class Experiment:
                     sink.close()
                 self.metrics.append(stats.result(run, ret))
             returns.append(ret)
-            per_step.append(rewards)
+            per_step.append(rewards.tolist())
         velocities = [m.mean_speed for m in self.metrics]
         return {
             "returns": returns,
