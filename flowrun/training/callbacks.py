@@ -73,7 +73,7 @@ def make_callbacks(
     """The progress and checkpoint callbacks (frequencies in environment steps, all envs)."""
     callbacks = require("stable_baselines3.common.callbacks")
 
-    class ProgressCallback(callbacks.BaseCallback):  # type: ignore[misc,name-defined]
+    class ProgressCallback(callbacks.BaseCallback):  # type: ignore[name-defined]
         """Reports ``(done, total, mean episode reward)`` after every vectorised step."""
 
         def _on_step(self) -> bool:
@@ -81,7 +81,7 @@ def make_callbacks(
                 progress(int(self.num_timesteps), total_timesteps, mean_episode_reward(self.model))
             return True
 
-    class CheckpointCallback(callbacks.BaseCallback):  # type: ignore[misc,name-defined]
+    class CheckpointCallback(callbacks.BaseCallback):  # type: ignore[name-defined]
         """Saves a checkpoint each time another ``checkpoint_freq`` steps are done."""
 
         def _init_callback(self) -> None:
@@ -97,10 +97,28 @@ def make_callbacks(
 
 
 def make_eval_callback(
-    eval_env: Any, best_dir: Path, log_dir: Path, eval_freq: int, n_envs: int, episodes: int
+    eval_env: Any,
+    best_dir: Path,
+    log_dir: Path,
+    eval_freq: int,
+    n_envs: int,
+    episodes: int,
+    best_stats: str,
 ) -> BaseCallback:
-    """SB3's ``EvalCallback`` (keeps ``best_model.zip``); ``eval_freq`` in env steps, all envs."""
+    """SB3's ``EvalCallback`` keeping ``best_model.zip``; ``eval_freq`` in env steps, all envs.
+
+    With ``VecNormalize``, the statistics the best model was evaluated with are saved beside
+    it as ``best_stats`` (they keep drifting afterwards).
+    """
     callbacks = require("stable_baselines3.common.callbacks")
+
+    class SaveBestStats(callbacks.BaseCallback):  # type: ignore[name-defined]
+        def _on_step(self) -> bool:
+            normalize = self.model.get_vec_normalize_env()
+            if normalize is not None:
+                normalize.save(str(best_dir / best_stats))
+            return True
+
     cb: BaseCallback = callbacks.EvalCallback(
         eval_env,
         n_eval_episodes=episodes,
@@ -109,6 +127,7 @@ def make_eval_callback(
         log_path=str(log_dir),
         deterministic=True,
         verbose=0,
+        callback_on_new_best=SaveBestStats(),
     )
     return cb
 

@@ -9,12 +9,17 @@ the final evaluation under ``eval/``.
 from __future__ import annotations
 
 import logging
+import shlex
+import sys
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from flowrun.config.dump import dump_config
 from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig, TrainConfig
+from flowrun.envs.factory import env_class
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.experiment.rundir import create_run_dir, write_json
 from flowrun.training.algorithms import algorithm_class, build_hyperparams
@@ -37,6 +42,7 @@ log = logging.getLogger(__name__)
 FINAL_MODEL = "final_model.zip"
 BEST_MODEL = "best_model.zip"
 VECNORMALIZE = "vecnormalize.pkl"
+BEST_VECNORMALIZE = "best_vecnormalize.pkl"
 
 
 @dataclass
@@ -46,14 +52,22 @@ class TrainResult:
     Attributes:
         run_dir: the run folder.
         timesteps: environment steps done (over all envs, resumed ones included).
-        wall_clock: seconds spent in this call's ``learn``.
+        wall_clock: seconds spent in this call's ``learn`` (evaluations during it included).
         status: ``complete`` or ``interrupted``.
+        resumed_from: timesteps of the checkpoint this call started from (0 for a new run).
     """
 
     run_dir: Path
     timesteps: int
     wall_clock: float
     status: str
+    resumed_from: int = 0
+
+    @property
+    def steps_per_second(self) -> float:
+        """Environment steps per second of this call."""
+        done = self.timesteps - self.resumed_from
+        return done / self.wall_clock if self.wall_clock > 0 else 0.0
 
 
 def train_section(cfg: ExperimentConfig) -> TrainConfig:
@@ -83,11 +97,11 @@ def train(
     """Train the config's policy with stable-baselines3 and write the run folder.
 
     Args:
-        cfg: the experiment, with a ``train:`` section (ignored when resuming: the run
-            folder's ``config.yaml`` is used).
+        cfg: the experiment, with a ``train:`` section. To resume, pass the run folder's
+            config (:func:`resume_config`), possibly with a larger ``train.total_timesteps``.
         out: parent of new run folders.
         resume_dir: an earlier run folder to continue from its last checkpoint up to
-            ``train.total_timesteps``.
+            ``train.total_timesteps`` (it keeps being written to).
         progress: called with ``(timesteps done, total, mean episode reward)``.
         argv: the command line saved in ``command.txt``.
 
@@ -97,15 +111,18 @@ def train(
     import time
 
     require("stable_baselines3")
-    state: dict[str, Any] | None = None
-    if resume_dir is not None:
-        cfg, state = _resume_state(resume_dir)
-        run_dir = resume_dir
     tc = train_section(cfg)
     seed = train_seed(cfg)
     cfg = replace(cfg, sim=replace(cfg.sim, seed=int(cfg.sim.seed or 0)))
     cls = algorithm_class(tc.algorithm)
-    if resume_dir is None:
+    build_hyperparams(tc.algorithm, tc.hyperparams)  # report a typo before any work
+    env_class(cfg)  # a wrong env.class or missing additional_params, also before any work
+    state: dict[str, Any] | None = None
+    if resume_dir is not None:
+        state = _resume_state(resume_dir)
+        run_dir = resume_dir
+        _note_resume(run_dir, cfg, state, argv)
+    else:
         run_dir = create_run_dir(out, cfg, seed, argv)
     ckpt_dir = run_dir / "checkpoints"
     venv = _training_env(cfg, tc, seed, run_dir, state)
@@ -119,13 +136,11 @@ def train(
             tc.algorithm, ckpt_dir, tc.checkpoint_freq, progress, tc.total_timesteps
         )
         if tc.eval_freq > 0:
-            eval_env = make_vec_env(cfg, 1, seed + 10_000, subprocess=True)
-            if tc.normalize:
-                eval_env = wrap_normalize(eval_env, None, training=False)
+            eval_env = _eval_env(cfg, tc, seed)
             callbacks.append(
                 make_eval_callback(
                     eval_env, run_dir, run_dir / "eval_log", tc.eval_freq, tc.n_envs,
-                    tc.eval_episodes,
+                    tc.eval_episodes, BEST_VECNORMALIZE,
                 )
             )
         remaining = tc.total_timesteps - int(model.num_timesteps)
@@ -152,20 +167,39 @@ def train(
         done = int(model.num_timesteps) if model is not None else 0
         _close(venv, eval_env)
         _write_train_metrics(run_dir, cfg, tc, seed, status, done, wall, state)
-    return TrainResult(run_dir, done, wall, status)
+    return TrainResult(run_dir, done, wall, status, int((state or {}).get("timesteps", 0)))
 
 
-def _resume_state(run_dir: Path) -> tuple[ExperimentConfig, dict[str, Any]]:
+def resume_config(run_dir: Path, overrides: Sequence[str] = ()) -> ExperimentConfig:
+    """A run folder's saved config with ``--set`` overrides (e.g. more ``total_timesteps``)."""
     config = run_dir / "config.yaml"
     if not config.is_file():
         raise TrainingError(f"{run_dir} is not a run folder (no config.yaml); pass a train run")
+    return load_config(config, overrides)
+
+
+def _resume_state(run_dir: Path) -> dict[str, Any]:
     state = read_checkpoint_state(run_dir / "checkpoints")
     if state is None:
         raise TrainingError(
             f"{run_dir} has no checkpoint to resume from (no checkpoints/state.json); "
             "set train.checkpoint_freq or start a new run"
         )
-    return load_config(config), state
+    return state
+
+
+def _note_resume(
+    run_dir: Path, cfg: ExperimentConfig, state: dict[str, Any], argv: list[str] | None
+) -> None:
+    """Append the command line; keep the earlier config if the resumed one differs."""
+    command = argv if argv is not None else sys.argv
+    with (run_dir / "command.txt").open("a") as f:
+        f.write(shlex.join(command) + "\n")
+    text = dump_config(cfg)
+    current = run_dir / "config.yaml"
+    if current.read_text() != text:
+        current.rename(run_dir / f"config.before_{state['timesteps']}.yaml")
+        current.write_text(text)
 
 
 def _training_env(
@@ -175,13 +209,33 @@ def _training_env(
     monitor_dir.mkdir(exist_ok=True)
     # Resumed runs reseed differently so they do not replay the first episodes.
     env_seed = seed if state is None else seed + int(state["timesteps"])
-    venv = make_vec_env(cfg, tc.n_envs, env_seed, monitor_dir=None, subprocess=True)
+    venv = make_vec_env(cfg, tc.n_envs, env_seed, monitor_dir=monitor_dir, subprocess=True)
     if tc.normalize:
         stats = None
         if state is not None and state.get("vecnormalize"):
             stats = run_dir / "checkpoints" / state["vecnormalize"]
-        venv = wrap_normalize(venv, stats, training=True)
+        venv = wrap_normalize(venv, stats, training=True, gamma=_gamma(tc))
     return venv
+
+
+def _eval_env(cfg: ExperimentConfig, tc: TrainConfig, seed: int) -> VecEnv:
+    """The env ``EvalCallback`` scores models on (picking ``best_model.zip``).
+
+    Evaluation-mode rewards (Flow's ``env.evaluate``: the mean speed for the ring envs), and
+    the same ``eval_episodes`` reset seeds at every evaluation, so scores are comparable.
+    SB3 resets once more after the last episode, hence one extra seed in the cycle.
+    """
+    eval_cfg = replace(cfg, env=replace(cfg.env, evaluate=True))
+    seeds = tuple(seed + 10_000 + i for i in range(tc.eval_episodes + 1))
+    env = make_vec_env(eval_cfg, 1, seed + 10_000, subprocess=True, cycle_seeds=seeds)
+    if tc.normalize:
+        env = wrap_normalize(env, None, training=False, gamma=_gamma(tc))
+    return env
+
+
+def _gamma(tc: TrainConfig) -> float:
+    """The discount of the reward normalisation: the algorithm's ``gamma`` (SB3 default 0.99)."""
+    return float(tc.hyperparams.get("gamma", 0.99))
 
 
 def _model(

@@ -6,11 +6,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import gymnasium
+
 from flowrun.config.model import ExperimentConfig
 from flowrun.training.deps import require
 
 if TYPE_CHECKING:
-    import gymnasium
     from stable_baselines3.common.vec_env import VecEnv
 
 
@@ -21,18 +22,37 @@ class EnvFactory:
     Attributes:
         cfg: the experiment.
         monitor_file: where ``Monitor`` writes episode returns (``None``: nowhere).
+        seeds: reset seeds used in turn, over and over (``None``: the env's own generator).
     """
 
     cfg: ExperimentConfig
     monitor_file: str | None = None
+    seeds: tuple[int, ...] | None = None
 
     def __call__(self) -> gymnasium.Env[Any, Any]:
         """Build the environment (in the process that calls it)."""
         from flowrun.envs.factory import make_env
 
         monitor = require("stable_baselines3.common.monitor").Monitor
-        env = make_env(self.cfg)
+        env: gymnasium.Env[Any, Any] = make_env(self.cfg)
+        if self.seeds:
+            env = CycleSeeds(env, self.seeds)
         return monitor(env, filename=self.monitor_file, info_keywords=("mean_speed",))
+
+
+class CycleSeeds(gymnasium.Wrapper):
+    """Resets with ``seeds[0]``, ``seeds[1]``, ... in turn, so evaluations repeat exactly."""
+
+    def __init__(self, env: gymnasium.Env[Any, Any], seeds: tuple[int, ...]) -> None:
+        super().__init__(env)
+        self._seeds = seeds
+        self._count = 0
+
+    def reset(self, **kwargs: Any) -> Any:
+        """Reset with the next seed of the cycle (a ``seed`` argument is ignored)."""
+        kwargs["seed"] = self._seeds[self._count % len(self._seeds)]
+        self._count += 1
+        return self.env.reset(**kwargs)
 
 
 def make_vec_env(
@@ -41,6 +61,7 @@ def make_vec_env(
     seed: int,
     monitor_dir: Path | None = None,
     subprocess: bool = True,
+    cycle_seeds: tuple[int, ...] | None = None,
 ) -> VecEnv:
     """``n_envs`` environments of a config; env ``rank`` is seeded ``seed + rank``.
 
@@ -51,10 +72,13 @@ def make_vec_env(
         monitor_dir: folder for one ``Monitor`` CSV per env (``None``: none written).
         subprocess: one subprocess per env (required for more than one env); ``False``
             builds a single env in this process.
+        cycle_seeds: reset seeds each env uses in turn (for repeatable evaluations).
     """
     vec = require("stable_baselines3.common.vec_env")
     factories = [
-        EnvFactory(cfg, None if monitor_dir is None else str(monitor_dir / f"env_{rank}"))
+        EnvFactory(
+            cfg, None if monitor_dir is None else str(monitor_dir / f"env_{rank}"), cycle_seeds
+        )
         for rank in range(n_envs)
     ]
     if subprocess:
@@ -67,8 +91,13 @@ def make_vec_env(
     return venv
 
 
-def wrap_normalize(venv: VecEnv, stats: Path | None, training: bool) -> VecEnv:
-    """Wrap in ``VecNormalize``: fresh, or with the statistics saved at ``stats``."""
+def wrap_normalize(
+    venv: VecEnv, stats: Path | None, training: bool, gamma: float = 0.99
+) -> VecEnv:
+    """Wrap in ``VecNormalize``: fresh, or with the statistics saved at ``stats``.
+
+    Observations are normalised; rewards too while training (discounted with ``gamma``).
+    """
     vec = require("stable_baselines3.common.vec_env")
     if stats is not None:
         normalized: VecEnv = vec.VecNormalize.load(str(stats), venv)
@@ -76,4 +105,4 @@ def wrap_normalize(venv: VecEnv, stats: Path | None, training: bool) -> VecEnv:
         if not training:
             normalized.norm_reward = False  # type: ignore[attr-defined]
         return normalized
-    return vec.VecNormalize(venv, training=training, norm_reward=training)  # type: ignore[no-any-return]
+    return vec.VecNormalize(venv, training=training, norm_reward=training, gamma=gamma)

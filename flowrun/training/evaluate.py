@@ -1,0 +1,227 @@
+"""``evaluate``: roll a trained policy out with :class:`Experiment` beside the all-human baseline.
+
+Both use the same config and the same seeds; in the baseline, every RL vehicle group drives with
+the acceleration controller (same parameters, same noise) of the first human group. Each episode
+is recorded to MCAP under ``<run>/eval/<timestamp>/``.
+"""
+
+from __future__ import annotations
+
+import pickle
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from flowrun.config.dump import config_to_dict, dump_config
+from flowrun.config.loader import config_from_dict, load_config
+from flowrun.config.model import ExperimentConfig
+from flowrun.config.overrides import apply_overrides
+from flowrun.config.params import VehicleParams, is_rl
+from flowrun.config.yamlio import Locations, parse_yaml
+from flowrun.envs.factory import make_env
+from flowrun.errors import ConfigError, TrainingError
+from flowrun.experiment.baseline import log_metadata
+from flowrun.experiment.metrics import RunMetrics
+from flowrun.experiment.rundir import write_json
+from flowrun.experiment.runner import Experiment, FrameSink
+from flowrun.recording.writer import McapRecorder
+from flowrun.training.algorithms import algorithm_class
+from flowrun.training.trainer import (
+    BEST_MODEL,
+    BEST_VECNORMALIZE,
+    FINAL_MODEL,
+    VECNORMALIZE,
+    train_section,
+)
+
+# progress(label, episode, step)
+EvalProgress = Callable[[str, int, int], None]
+MODELS = ("best", "final")
+
+
+@dataclass
+class EvalResult:
+    """Metrics of the policy and of the all-human baseline, episode by episode.
+
+    Attributes:
+        out_dir: the evaluation folder (``<run>/eval/<timestamp>``).
+        model: the model file rolled out.
+        policy: one entry per policy episode.
+        baseline: one entry per baseline episode (same seeds).
+        logs: MCAP files written.
+    """
+
+    out_dir: Path
+    model: Path
+    policy: list[RunMetrics]
+    baseline: list[RunMetrics]
+    logs: list[Path]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data for ``metrics.json``."""
+        return {
+            "model": str(self.model),
+            "policy": [m.to_dict() for m in self.policy],
+            "baseline": [m.to_dict() for m in self.baseline],
+            "policy_mean": mean_metrics(self.policy),
+            "baseline_mean": mean_metrics(self.baseline),
+            "logs": [p.name for p in self.logs],
+        }
+
+
+def mean_metrics(rows: Sequence[RunMetrics]) -> dict[str, float]:
+    """Mean of each numeric metric over episodes."""
+    keys = ("mean_speed", "last_half_mean_speed", "speed_std", "last_half_speed_std",
+            "min_speed", "episode_return", "collisions")
+    return {k: float(np.mean([getattr(m, k) for m in rows])) if rows else float("nan")
+            for k in keys}
+
+
+def all_human(cfg: ExperimentConfig) -> ExperimentConfig:
+    """The config with each RL group driven like the first human group."""
+    humans = [g for g in cfg.vehicles.groups if not is_rl(g)]
+    if not humans:
+        raise ConfigError("no human vehicle group to copy for the all-human baseline", "vehicles")
+    human = humans[0].acceleration_controller
+    groups = [
+        replace(g, acceleration_controller=human) if is_rl(g) else g for g in cfg.vehicles.groups
+    ]
+    return replace(cfg, vehicles=VehicleParams(groups))
+
+
+def eval_config(
+    run_dir: Path, overrides: Sequence[str] = (), config_override: Path | None = None
+) -> ExperimentConfig:
+    """The run's saved config, merged with an override YAML file, then ``--set`` values."""
+    saved = run_dir / "config.yaml"
+    if not saved.is_file():
+        raise TrainingError(f"{run_dir} is not a run folder (no config.yaml); pass a train run")
+    if config_override is None:
+        return load_config(saved, overrides)
+    data = config_to_dict(load_config(saved))
+    try:
+        text = config_override.read_text(encoding="utf-8")
+    except OSError as err:
+        raise ConfigError(f"cannot read {config_override}: {err.strerror}") from None
+    extra, _ = parse_yaml(text, str(config_override))
+    if not isinstance(extra, dict):
+        raise ConfigError("expected a mapping of sections to override", "", str(config_override))
+    _merge(data, extra)
+    apply_overrides(data, list(overrides), Locations("--set"))
+    return config_from_dict(data, str(config_override))
+
+
+def _merge(base: dict[str, Any], extra: dict[str, Any]) -> None:
+    for key, value in extra.items():
+        if isinstance(value, dict) and isinstance(base.get(key), dict):
+            _merge(base[key], value)
+        else:
+            base[key] = value
+
+
+def model_path(run_dir: Path, which: str = "best") -> Path:
+    """``best_model.zip`` (falling back to ``final_model.zip``) or ``final_model.zip``."""
+    if which not in MODELS:
+        raise ConfigError(f"--model must be one of {', '.join(MODELS)}, got '{which}'")
+    order = (BEST_MODEL, FINAL_MODEL) if which == "best" else (FINAL_MODEL,)
+    for name in order:
+        if (run_dir / name).is_file():
+            return run_dir / name
+    raise TrainingError(
+        f"{run_dir} has no {' or '.join(order)}; train first (or resume an interrupted run)"
+    )
+
+
+def evaluate(
+    run_dir: Path,
+    episodes: int = 1,
+    deterministic: bool = True,
+    overrides: Sequence[str] = (),
+    config_override: Path | None = None,
+    model: str = "best",
+    progress: EvalProgress | None = None,
+) -> EvalResult:
+    """Roll out the trained policy and the all-human baseline, ``episodes`` each.
+
+    Episode ``i`` of both resets with seed ``sim.seed + i``. Writes ``metrics.json`` and
+    the MCAP logs (``policy_<i>.mcap``, ``baseline_<i>.mcap``) to ``<run>/eval/<timestamp>/``.
+    """
+    if episodes < 1:
+        raise ConfigError(f"--episodes must be >= 1, got {episodes}")
+    cfg = eval_config(run_dir, overrides, config_override)
+    tc = train_section(cfg)
+    path = model_path(run_dir, model)
+    policy = algorithm_class(tc.algorithm).load(path, device="cpu")
+    stats = BEST_VECNORMALIZE if path.name == BEST_MODEL else VECNORMALIZE
+    normalize = _load_normalize(run_dir / stats) if tc.normalize else None
+    out_dir = _eval_dir(run_dir)
+    (out_dir / "config.yaml").write_text(dump_config(cfg))
+    seed = int(cfg.sim.seed or 0)
+    logs: list[Path] = []
+
+    def act(obs: Any) -> Any:
+        x = normalize.normalize_obs(obs) if normalize is not None else obs
+        action, _ = policy.predict(x, deterministic=deterministic)
+        return action
+
+    rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
+    human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs, progress)
+    result = EvalResult(out_dir, path, rl, human, logs)
+    write_json(out_dir / "metrics.json", {"seed": seed, "deterministic": deterministic,
+                                          **result.to_dict()})
+    return result
+
+
+def _load_normalize(path: Path) -> Any:
+    if not path.is_file():
+        raise TrainingError(f"train.normalize is on but {path} is missing")
+    with path.open("rb") as f:
+        return pickle.load(f)  # VecNormalize without its env: only the statistics are used
+
+
+def _eval_dir(run_dir: Path) -> Path:
+    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
+    base = run_dir / "eval" / stamp
+    out, n = base, 1
+    while out.exists():
+        out = base.with_name(f"{stamp}-{n}")
+        n += 1
+    out.mkdir(parents=True)
+    return out
+
+
+def _rollout(
+    cfg: ExperimentConfig,
+    label: str,
+    episodes: int,
+    seed: int,
+    act: Callable[[Any], Any] | None,
+    out_dir: Path,
+    logs: list[Path],
+    progress: EvalProgress | None,
+) -> list[RunMetrics]:
+    env = make_env(cfg)
+
+    def sink(run: int) -> FrameSink:
+        path = out_dir / f"{label}_{run}.mcap"
+        logs.append(path)
+        attachments = {"config.yaml": dump_config(cfg).encode()}
+        if env.k.net_file is not None:
+            attachments["network.net.xml"] = env.k.net_file.read_bytes()
+        meta = {**log_metadata(cfg, seed, run), "evaluation": label}
+        return McapRecorder(path, metadata=meta, attachments=attachments)
+
+    def on_step(run: int, step: int) -> None:
+        if progress is not None:
+            progress(label, run, step)
+
+    try:
+        experiment = Experiment(env, sink_factory=sink, progress=on_step)
+        experiment.run(episodes, int(cfg.env.horizon), rl_actions=act, seed=seed)
+    finally:
+        env.close()
+    return list(experiment.metrics)
