@@ -23,6 +23,7 @@ from flowrun.cli.commands_run import (
     SeedOpt,
     SetOpt,
     console,
+    interrupt_between_steps,
     overrides_with_seed,
     sigterm_as_interrupt,
 )
@@ -127,11 +128,13 @@ def _evaluate_and_show(
     horizon = eval_config(run_dir, overrides, config).env.horizon
     columns = (TextColumn("{task.fields[label]} episode {task.fields[episode]}"), BarColumn(),
                MofNCompleteColumn(), TimeRemainingColumn())
-    with _progress_bar(*columns) as bar, sigterm_as_interrupt():
+    # Stop at a step boundary so the MCAP log being written is finished cleanly.
+    with _progress_bar(*columns) as bar, interrupt_between_steps() as check:
         task = bar.add_task("eval", total=int(horizon), label="policy", episode=0)
 
         def progress(label: str, episode: int, step: int) -> None:
             bar.update(task, completed=step, label=label, episode=episode)
+            check()
 
         try:
             result = evaluate(run_dir, episodes, deterministic, overrides, config, model,
