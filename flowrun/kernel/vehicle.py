@@ -108,6 +108,7 @@ class VehicleKernel:
         )
         self._start_position = self._starts[start_idx] + np.array(self.table.start_lane_pos)
         self._following = RingFollowing(self.table.lengths, spec.length)
+        self._any_continuous = bool(self.table.continuous.any())
         self.speed_limit = np.full(self.table.size, self._edge_speeds[0])
         # A route runs once around the ring from its first edge, so its last edge is the one
         # before: ContinuousRouter gives a car its next loop when its odometer reaches it.
@@ -141,7 +142,7 @@ class VehicleKernel:
             self._stale_edges = True
             if not self._uniform_speed:
                 self.speed_limit = self._edge_speeds[self._edge_index()]
-            if self.table.continuous.any() and (self.odometer >= self._next_reroute).any():
+            if self._any_continuous and (self.odometer >= self._next_reroute).any():
                 self._reroute()
             self.leader, self.follower, self.headway = self._following.compute(
                 self.position, self.lanes

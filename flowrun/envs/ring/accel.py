@@ -22,6 +22,12 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
 }
 
 
+def clip_unit(x: np.ndarray) -> np.ndarray:
+    """``x`` clipped to [0, 1] in place (two ufuncs: cheaper than ``np.clip`` per step)."""
+    np.maximum(x, 0.0, out=x)
+    return np.minimum(x, 1.0, out=x)
+
+
 def acceleration_box(additional_params: dict[str, Any], num_rl: int) -> Box:
     """One acceleration per RL car in ``[-|max_decel|, max_accel]`` m/s^2."""
     return Box(
@@ -77,7 +83,7 @@ class AccelEnv(Env):
             order = np.argsort(pos, kind="stable")
             speed, pos = speed[order], pos[order]
         obs = np.concatenate([speed / self.k.network.max_speed(), pos / self.k.network.length()])
-        return np.clip(obs, 0.0, 1.0)
+        return clip_unit(obs)
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired-velocity reward (mean speed when ``env_params.evaluate``)."""

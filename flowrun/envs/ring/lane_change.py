@@ -7,7 +7,7 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium.spaces import Box
 
-from flowrun.envs.ring.accel import AccelEnv
+from flowrun.envs.ring.accel import AccelEnv, clip_unit
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     # maximum acceleration of the RL cars, m/s^2
@@ -78,7 +78,7 @@ class LaneChangeAccelEnv(AccelEnv):
         speed = np.array(vk.get_speed(ids)) / self.k.network.max_speed()
         pos = np.array([vk.get_x_by_id(v) for v in ids]) / self.k.network.length()
         lane = np.array(vk.get_lane(ids), dtype=np.float64) / lanes
-        return np.clip(np.concatenate([speed, pos, lane]), 0.0, 1.0)
+        return clip_unit(np.concatenate([speed, pos, lane]))
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired velocity minus 0.1 per RL lane change (mean speed when evaluating)."""

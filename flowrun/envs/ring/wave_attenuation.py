@@ -13,7 +13,7 @@ from gymnasium.spaces import Box
 
 from flowrun.envs.base import Env
 from flowrun.envs.rewards import wave_attenuation_terms
-from flowrun.envs.ring.accel import acceleration_box
+from flowrun.envs.ring.accel import acceleration_box, clip_unit
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
 
@@ -90,7 +90,7 @@ class WaveAttenuationEnv(Env):
         vk = self.k.vehicle
         speed = vk.speed / self.k.network.max_speed()
         pos = vk.position / self.k.network.length()
-        return np.clip(np.concatenate([speed, pos]), 0.0, 1.0)
+        return clip_unit(np.concatenate([speed, pos]))
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Speed reward minus acceleration penalty (mean speed when evaluating)."""
