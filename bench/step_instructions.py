@@ -8,16 +8,19 @@ Modes:
     raw  SUMO's own IDM drives (cars get many-lap routes first); only ``simulationStep``.
     exp  ``Experiment.run`` of ``configs/sugiyama.yaml`` (what ``flowrun baseline --no-record``
          runs per step: flowrun IDM, commands, per-step statistics).
+    rec  ``exp`` plus an MCAP recorder (what ``flowrun baseline`` runs per step).
 """
 
 from __future__ import annotations
 
 import sys
+import tempfile
 from pathlib import Path
 
 from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
 from flowrun.experiment.runner import Experiment
+from flowrun.recording.writer import McapRecorder
 
 SUGIYAMA = Path(__file__).resolve().parent.parent / "configs" / "sugiyama.yaml"
 SUMO_IDM = (
@@ -42,7 +45,12 @@ def main() -> None:
         assert api.vehicle.getIDCount() == 22
     else:
         env = make_env(load_config(SUGIYAMA, [f"env.horizon={steps}"]))
-        Experiment(env).run(1, steps)
+        with tempfile.TemporaryDirectory() as tmp:
+
+            def sink(run: int) -> McapRecorder:
+                return McapRecorder(Path(tmp) / f"run_{run}.mcap", metadata={}, attachments={})
+
+            Experiment(env, sink_factory=sink if mode == "rec" else None).run(1, steps)
     env.close()
 
 
