@@ -31,7 +31,7 @@ from flowrun.config.model import ExperimentConfig
 from flowrun.envs.base import Env
 from flowrun.envs.factory import make_env
 from flowrun.experiment import Experiment
-from flowrun.experiment.baseline import log_metadata
+from flowrun.experiment.baseline import open_run_log
 from flowrun.recording.writer import McapRecorder
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
@@ -128,10 +128,7 @@ def time_experiment(cfg: ExperimentConfig, ring: Ring, record: bool, tmp: Path) 
             marks["t0"] = time.perf_counter()
 
     def sink(run: int) -> McapRecorder:
-        attachments = {"network.net.xml": env.k.net_file.read_bytes()} if env.k.net_file else {}
-        return McapRecorder(
-            tmp / f"run_{run}.mcap", metadata=log_metadata(cfg, 0, run), attachments=attachments
-        )
+        return open_run_log(tmp / f"run_{run}.mcap", env, cfg, 0, run)
 
     try:
         experiment = Experiment(env, sink_factory=sink if record else None, progress=progress)

@@ -11,6 +11,7 @@ from typing import Any
 
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
+from flowrun.envs.base import Env
 from flowrun.envs.factory import env_class, make_env
 from flowrun.errors import ConfigError
 from flowrun.experiment.metrics import RunMetrics
@@ -76,6 +77,26 @@ def log_metadata(
     return meta
 
 
+def open_run_log(
+    path: Path,
+    env: Env,
+    cfg: ExperimentConfig,
+    seed: int,
+    run: int,
+    record_every: int = 1,
+    extra: dict[str, str] | None = None,
+) -> McapRecorder:
+    """The MCAP log of one run: metadata, the config and the network as attachments.
+
+    Call after ``env.reset`` (the network file of the episode exists then).
+    """
+    attachments = {"config.yaml": dump_config(cfg).encode()}
+    if env.k.net_file is not None:
+        attachments["network.net.xml"] = env.k.net_file.read_bytes()
+    meta = {**log_metadata(cfg, seed, run, record_every), **(extra or {})}
+    return McapRecorder(path, metadata=meta, attachments=attachments, record_every=record_every)
+
+
 def run_baseline(
     cfg: ExperimentConfig,
     *,
@@ -112,20 +133,10 @@ def run_baseline(
     logs: list[Path] = []
     gif_frames: list[Any] = []
 
-    def sink(run: int) -> FrameSink | None:
-        if not record:
-            return None
+    def sink(run: int) -> FrameSink:
         path = run_dir / f"run_{run}.mcap"
         logs.append(path)
-        attachments = {"config.yaml": dump_config(cfg).encode()}
-        if env.k.net_file is not None:
-            attachments["network.net.xml"] = env.k.net_file.read_bytes()
-        return McapRecorder(
-            path,
-            metadata=log_metadata(cfg, seed + run, run, record_every),
-            attachments=attachments,
-            record_every=record_every,
-        )
+        return open_run_log(path, env, cfg, seed + run, run, record_every)
 
     def on_step(run: int, step: int) -> None:
         if render and run == 0 and step % GIF_EVERY == 0:

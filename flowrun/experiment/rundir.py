@@ -41,23 +41,26 @@ def versions() -> dict[str, str]:
     return found
 
 
+def unique_dir(base: Path) -> Path:
+    """Create ``base`` (or ``base-1``, ``base-2``, ... if taken) and return it: never reuse one."""
+    path, n = base, 1
+    while True:
+        try:
+            path.mkdir(parents=True, exist_ok=False)
+            return path
+        except FileExistsError:
+            path = base.with_name(f"{base.name}-{n}")
+            n += 1
+        except OSError as err:
+            raise FlowrunError(f"cannot create folder {path}: {err}") from err
+
+
 def create_run_dir(
     out: Path, cfg: ExperimentConfig, seed: int, argv: list[str] | None = None
 ) -> Path:
     """Make a fresh run folder and write the resolved config, command line and versions."""
     stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
-    base = out / cfg.name / f"{stamp}-{seed}"
-    run_dir = base
-    n = 1
-    while True:
-        try:
-            run_dir.mkdir(parents=True, exist_ok=False)
-            break
-        except FileExistsError:
-            run_dir = base.with_name(f"{base.name}-{n}")
-            n += 1
-        except OSError as err:
-            raise FlowrunError(f"cannot create run folder {run_dir}: {err}") from err
+    run_dir = unique_dir(out / cfg.name / f"{stamp}-{seed}")
     (run_dir / "config.yaml").write_text(dump_config(cfg))
     command = argv if argv is not None else sys.argv
     (run_dir / "command.txt").write_text(shlex.join(command) + "\n")

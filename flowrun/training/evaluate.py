@@ -24,11 +24,10 @@ from flowrun.config.params import VehicleParams, is_rl
 from flowrun.config.yamlio import Locations, parse_yaml
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError, TrainingError
-from flowrun.experiment.baseline import log_metadata
+from flowrun.experiment.baseline import open_run_log
 from flowrun.experiment.metrics import RunMetrics
-from flowrun.experiment.rundir import write_json
+from flowrun.experiment.rundir import unique_dir, write_json
 from flowrun.experiment.runner import Experiment, FrameSink
-from flowrun.recording.writer import McapRecorder
 from flowrun.training.algorithms import algorithm_class
 from flowrun.training.trainer import (
     BEST_MODEL,
@@ -184,14 +183,7 @@ def _load_normalize(path: Path) -> Any:
 
 
 def _eval_dir(run_dir: Path) -> Path:
-    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
-    base = run_dir / "eval" / stamp
-    out, n = base, 1
-    while out.exists():
-        out = base.with_name(f"{stamp}-{n}")
-        n += 1
-    out.mkdir(parents=True)
-    return out
+    return unique_dir(run_dir / "eval" / datetime.now(UTC).strftime("%Y%m%d-%H%M%S"))
 
 
 def _rollout(
@@ -209,11 +201,7 @@ def _rollout(
     def sink(run: int) -> FrameSink:
         path = out_dir / f"{label}_{run}.mcap"
         logs.append(path)
-        attachments = {"config.yaml": dump_config(cfg).encode()}
-        if env.k.net_file is not None:
-            attachments["network.net.xml"] = env.k.net_file.read_bytes()
-        meta = {**log_metadata(cfg, seed, run), "evaluation": label}
-        return McapRecorder(path, metadata=meta, attachments=attachments)
+        return open_run_log(path, env, cfg, seed + run, run, extra={"evaluation": label})
 
     def on_step(run: int, step: int) -> None:
         if progress is not None:
