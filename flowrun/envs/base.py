@@ -158,7 +158,7 @@ class Env(gymnasium.Env):
         table = build_table(self.network.vehicles, self.controls, start)
         sumo_seed = int(self.np_random.integers(2**31 - 1))
         self._ctrl_rng = np.random.default_rng(int(self.np_random.integers(2**63 - 1)))
-        self.k.sim_params = _with_seed(self.sim_params, sumo_seed)
+        self.k.sim_params = replace(self.sim_params, seed=sumo_seed)
         self.k.reset(self.network, table, read_xy=self.read_xy or self.record_frames)
         for control in self.controls:
             control.controller.reset(control.index.size)
@@ -166,7 +166,7 @@ class Env(gymnasium.Env):
         self.time_counter = 0
         self.frames = []
         self._needs_reset = False
-        self._emit_frame(math.nan)
+        self._emit_frame()
         for _ in range(self.env_params.warmup_steps):
             self._simulate(None)
             if self.k.simulation.check_collision():
@@ -225,7 +225,7 @@ class Env(gymnasium.Env):
             self._apply_rl_actions(action)
         self.additional_command()
         self.k.step()
-        self._emit_frame(math.nan)
+        self._emit_frame()
 
     def apply_rl_actions(self, rl_actions: Any = None) -> None:
         """Clip (if asked) and apply the agent's action; ``None`` does nothing."""
@@ -244,10 +244,9 @@ class Env(gymnasium.Env):
         """Clip a Box action to the action space when ``env_params.clip_actions``."""
         if self._bounds is None:
             space = self._spaces()[0]
-            clip = self.env_params.clip_actions and isinstance(space, gymnasium.spaces.Box)
             self._bounds = (
                 (np.asarray(space.low, np.float64), np.asarray(space.high, np.float64))
-                if clip and isinstance(space, gymnasium.spaces.Box)
+                if self.env_params.clip_actions and isinstance(space, gymnasium.spaces.Box)
                 else ()
             )
         if not self._bounds:
@@ -272,12 +271,13 @@ class Env(gymnasium.Env):
             "reward_terms": dict(self.reward_terms),
         }
 
-    def _emit_frame(self, reward: float) -> None:
+    def _emit_frame(self) -> None:
+        """Queue this simulation step's frame/stats; ``step`` fills in the reward."""
         if not (self.record_frames or self.collect_stats):
             return
         step = self.k.simulation.step_count
         frame = snapshot_frame(self.k, step) if self.record_frames else None
-        self.frames.append((frame, snapshot_stats(self.k, step, reward)))
+        self.frames.append((frame, snapshot_stats(self.k, step, math.nan)))
 
     def render(self) -> Any:
         """A top-down RGB picture of the ring (``render_mode="rgb_array"``), else ``None``."""
@@ -298,6 +298,3 @@ class Env(gymnasium.Env):
         with contextlib.suppress(Exception):  # interpreter shutdown
             self.close()
 
-
-def _with_seed(params: SumoParams, seed: int) -> SumoParams:
-    return replace(params, seed=seed)

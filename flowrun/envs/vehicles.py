@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -23,12 +23,12 @@ class GroupControl:
     name: str
     index: np.ndarray
     controller: AccelerationController
+    #: the same vehicles as a slice (groups are contiguous in placement order): a view, no copy
+    sl: slice = field(init=False)
 
-    @property
-    def sl(self) -> slice:
-        """The group's vehicles as a slice (groups are contiguous in placement order)."""
+    def __post_init__(self) -> None:
         start = int(self.index[0]) if self.index.size else 0
-        return slice(start, start + int(self.index.size))
+        self.sl = slice(start, start + int(self.index.size))
 
 
 def mode_value(mode: str | int, table: dict[str, int], what: str) -> int:

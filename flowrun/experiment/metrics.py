@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 from array import array
-from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -100,11 +99,3 @@ class RunAccumulator:
             collisions=self.collisions,
             teleports=self.teleports,
         )
-
-
-def summarize_run(run: int, stats: Sequence[StepStats], episode_return: float) -> RunMetrics:
-    """Metrics of one run from its per-step statistics."""
-    acc = RunAccumulator()
-    for s in stats:
-        acc.add(s)
-    return acc.result(run, episode_return)

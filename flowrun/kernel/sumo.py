@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -83,6 +84,34 @@ def gui_available() -> bool:
     except SimulationError:
         return False
     return True
+
+
+@dataclass(frozen=True)
+class FastCalls:
+    """The per-vehicle calls made every step, bound once.
+
+    libsumo's Python wrappers add a function layer over the compiled calls; on the hot path
+    the compiled ones are used directly (same arguments, same results). TraCI keeps its own.
+    """
+
+    get_speed: Callable[[str], float]
+    get_distance: Callable[[str], float]
+    get_position: Callable[[str], tuple[float, float]]
+    slow_down: Callable[[str, float, float], None]
+
+    @staticmethod
+    def of(api: Any) -> FastCalls:
+        """The fastest equivalent calls of ``api`` (``libsumo`` or ``traci``)."""
+        raw = getattr(api, "_libsumo", None)
+        if raw is not None and hasattr(raw, "vehicle_getSpeed"):
+            return FastCalls(
+                raw.vehicle_getSpeed,
+                raw.vehicle_getDistance,
+                raw.vehicle_getPosition,
+                raw.vehicle_slowDown,
+            )
+        v = api.vehicle
+        return FastCalls(v.getSpeed, v.getDistance, v.getPosition, v.slowDown)
 
 
 class SumoProcess:

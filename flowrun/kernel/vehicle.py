@@ -8,43 +8,15 @@ just before the simulation step.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
 
 from flowrun.controllers.base import CarFollowingInputs
 from flowrun.kernel.snapshot import RingFollowing, VehicleTable
+from flowrun.kernel.sumo import FastCalls
 from flowrun.networks.base import NetworkSpec
-
-
-@dataclass(frozen=True)
-class FastCalls:
-    """The per-vehicle calls made every step, bound once.
-
-    libsumo's Python wrappers add a function layer over the compiled calls; on the hot path
-    the compiled ones are used directly (same arguments, same results). TraCI keeps its own.
-    """
-
-    get_speed: Callable[[str], float]
-    get_distance: Callable[[str], float]
-    get_position: Callable[[str], tuple[float, float]]
-    slow_down: Callable[[str, float, float], None]
-
-    @staticmethod
-    def of(api: Any) -> FastCalls:
-        """The fastest equivalent calls of ``api`` (``libsumo`` or ``traci``)."""
-        raw = getattr(api, "_libsumo", None)
-        if raw is not None and hasattr(raw, "vehicle_getSpeed"):
-            return FastCalls(
-                raw.vehicle_getSpeed,
-                raw.vehicle_getDistance,
-                raw.vehicle_getPosition,
-                raw.vehicle_slowDown,
-            )
-        v = api.vehicle
-        return FastCalls(v.getSpeed, v.getDistance, v.getPosition, v.slowDown)
 
 
 class VehicleKernel:
@@ -89,7 +61,7 @@ class VehicleKernel:
         self.speed_limit = np.full(n, np.inf)
         self._lane_change: dict[int, int] = {}
         self._routes: dict[int, list[str]] = {}
-        self._edge_speed = {e.id: e.speed for e in spec.edges}
+        self._edge_by_id = {e.id: e for e in spec.edges}
         self._multi_lane = any(e.lanes > 1 for e in spec.edges)
 
     # ------------------------------------------------------------------ reading
@@ -172,7 +144,8 @@ class VehicleKernel:
         self.position = np.array([starts.get(e, math.nan) for e in edges]) + self._lane_pos
         self._edges_cache = edges
         self._stale_edges = False
-        self.speed_limit = np.array([self._edge_speed.get(e, math.inf) for e in edges])
+        by_id = self._edge_by_id
+        self.speed_limit = np.array([by_id[e].speed if e in by_id else math.inf for e in edges])
         n = len(ids)
         self.leader = np.full(n, -1, dtype=np.int64)
         self.follower = np.full(n, -1, dtype=np.int64)
@@ -266,7 +239,8 @@ class VehicleKernel:
             for i, speed in zip(todo.tolist(), target.tolist(), strict=True):
                 slow_down(ids[i], speed, 1e-3)
         for i, d in self._lane_change.items():
-            lanes = self._num_lanes(self.edges[i])
+            edge = self._edge_by_id.get(self.edges[i])
+            lanes = edge.lanes if edge is not None else 1
             target_lane = min(max(int(self.lanes[i]) + d, 0), lanes - 1)
             if target_lane != self.lanes[i]:
                 v.changeLane(ids[i], target_lane, 100000.0)
@@ -277,12 +251,6 @@ class VehicleKernel:
         self.accel_cmd = self._no_cmd.copy()
         self._lane_change = {}
         self._routes = {}
-
-    def _num_lanes(self, edge: str) -> int:
-        for e in self.spec.edges:
-            if e.id == edge:
-                return e.lanes
-        return 1
 
     # ------------------------------------------------------------------ controller inputs
     def inputs(self, idx: np.ndarray | slice, time: float) -> CarFollowingInputs:
