@@ -10,7 +10,7 @@ import pytest
 
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError
-from flowrun.kernel.snapshot import leaders_on_ring
+from flowrun.kernel.snapshot import RingFollowing, leaders_on_ring
 
 INF = math.inf
 
@@ -72,6 +72,46 @@ def test_lengths_of_the_leader_not_the_ego_are_subtracted() -> None:
     )
     assert leader.tolist() == [1, 0]
     assert headway.tolist() == pytest.approx([20.0 - 7.0, 80.0 - 3.0])
+
+
+def test_ring_following_reuses_the_order_and_matches_a_fresh_sort() -> None:
+    # 7 cars of two lengths drive 2,000 steps at different speeds without passing: headways
+    # from the unwrapped positions equal a fresh sort of the wrapped ones at every step.
+    rng = np.random.default_rng(3)
+    length, n = 230.0, 7
+    lengths = np.array([5.0, 5.0, 4.0, 5.0, 7.0, 5.0, 5.0])
+    start = np.sort(rng.uniform(0, length, n))[::-1].copy()  # index order != ring order
+    following = RingFollowing(lengths, length)
+    odometer = np.zeros(n)
+    for step in range(2000):
+        u = start + odometer
+        leader, follower, headway = following.compute(u)
+        ref_leader, ref_follower, ref_headway = leaders_on_ring(
+            np.mod(u, length), np.zeros(n, dtype=np.int64), lengths, length
+        )
+        assert leader.tolist() == ref_leader.tolist(), step
+        assert follower.tolist() == ref_follower.tolist(), step
+        assert headway == pytest.approx(ref_headway, abs=1e-9), step
+        # everyone moves, but never more than the gap ahead: no passing
+        odometer = odometer + np.minimum(rng.uniform(0, 3, n), np.maximum(headway, 0) * 0.9)
+    assert following.complete
+    assert odometer.min() > 230.0  # every car lapped the ring at least once
+
+
+def test_ring_following_finds_the_new_order_after_a_car_passes_its_leader() -> None:
+    lengths = np.full(3, 5.0)
+    following = RingFollowing(lengths, 100.0)
+    following.compute(np.array([10.0, 30.0, 60.0]))  # 0 -> 1 -> 2 -> 0
+    leader, _, headway = following.compute(np.array([40.0, 30.0, 60.0]))  # car 0 jumped car 1
+    assert leader.tolist() == [2, 0, 1]
+    assert headway.tolist() == pytest.approx([15.0, 5.0, 65.0])
+
+
+def test_ring_following_of_one_car_has_no_leader() -> None:
+    following = RingFollowing(np.array([5.0]), 100.0)
+    leader, follower, headway = following.compute(np.array([250.0]))
+    assert (leader.tolist(), follower.tolist(), headway.tolist()) == ([-1], [-1], [INF])
+    assert not following.complete
 
 
 # --- getters against raw libsumo -----------------------------------------------------------

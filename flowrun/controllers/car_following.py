@@ -61,9 +61,8 @@ def idm_accel(
         accelerations, m/s^2.
     """
     s_star = s0 + np.maximum(0.0, v * T + v * (v - v_lead) / (2.0 * math.sqrt(a * b)))
-    has_leader = np.isfinite(h)
-    gap = np.where(has_leader, np.maximum(h, MIN_GAP), 1.0)
-    interaction = np.where(has_leader, (s_star / gap) ** 2, 0.0)
+    # Without a leader h = inf, so s*/h = 0 and the interaction term vanishes (Flow: s* = 0).
+    interaction = np.square(s_star / np.maximum(h, MIN_GAP))
     return a * (1.0 - (v / v0) ** delta - interaction)
 
 

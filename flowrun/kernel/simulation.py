@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from flowrun.kernel.sumo import FastCalls
+
 
 class SimulationKernel:
     """Simulation clock and per-step safety counters of the current episode."""
@@ -22,6 +24,7 @@ class SimulationKernel:
     def attach(self, api: Any) -> None:
         """Bind to a freshly started simulation and zero the counters."""
         self.api = api
+        self._fast = FastCalls.of(api)
         self.collisions = self.teleports = 0
         self.step_collisions = self.step_teleports = 0
         self.step_count = 0
@@ -30,16 +33,16 @@ class SimulationKernel:
 
     def simulation_step(self) -> None:
         """Advance SUMO by one step and count what it reported."""
-        sim = self.api.simulation
-        sim.step()
+        fast = self._fast
+        fast.sim_step(0.0)
         self.step_count += 1
-        self.time = float(sim.getTime())
-        self.step_collisions = int(sim.getCollidingVehiclesNumber())
-        self.step_teleports = int(sim.getStartingTeleportNumber())
-        if self.step_collisions:
-            self.colliding_ids = list(sim.getCollidingVehiclesIDList())
-        self.collisions += self.step_collisions
-        self.teleports += self.step_teleports
+        self.time = fast.sim_time()
+        self.step_collisions = collisions = fast.colliding_number()
+        self.step_teleports = teleports = fast.teleport_number()
+        if collisions:
+            self.colliding_ids = list(self.api.simulation.getCollidingVehiclesIDList())
+        self.collisions += collisions
+        self.teleports += teleports
 
     def check_collision(self) -> bool:
         """Whether SUMO reported a collision (or a teleport) in the last step."""

@@ -89,34 +89,53 @@ def leaders_on_ring(
 
 
 class RingFollowing:
-    """Who follows whom on a closed ring, reusing the last order while it still holds.
+    """Who follows whom on a closed single-lane ring, reusing the order while it holds.
 
-    On a single lane cars cannot pass, so the cyclic order found at the start stays valid; it
-    is checked every step for the price of one sum (the gaps of a consistent cyclic order add
-    up to exactly one ring length) and recomputed by :func:`leaders_on_ring` when it breaks.
+    Cars cannot pass on a single lane, so the cyclic order found at the start stays valid.
+    Headways come from the *unwrapped* positions ``u`` (entry position + distance driven, never
+    taken modulo the ring length): ``h = u[leader] - u + wrap - length[leader]``, where ``wrap``
+    (a whole number of ring lengths: one for the car whose leader is the rearmost car, else 0)
+    is fixed when the order is found. A car that got past its leader (a collision SUMO let
+    through) shows a gap below minus its leader's length; the order is then found anew by
+    :func:`leaders_on_ring`.
 
     Attributes:
-        complete: every car has a leader and a follower (single lane, two cars or more).
+        complete: every car has a leader and a follower (two cars or more).
     """
 
     def __init__(self, lengths: FloatArray, ring_length: float) -> None:
         self.lengths = lengths
         self.ring_length = ring_length
         self.complete = False
-        self._leader: IntArray | None = None
-        self._follower: IntArray | None = None
+        self._order: tuple[IntArray, IntArray, FloatArray, FloatArray] | None = None
+        same = lengths.size == 0 or bool(np.all(lengths == lengths[0]))
+        self._one_length = float(lengths[0]) if same and lengths.size else None
 
-    def compute(
-        self, position: FloatArray, lanes: IntArray
-    ) -> tuple[IntArray, IntArray, FloatArray]:
-        """Leader index, follower index and headway (m) of every car."""
-        n = position.shape[0]
-        single = n >= 2 and lanes.min() == lanes.max()
-        if single and self._leader is not None and self._follower is not None:
-            gap = np.mod(position[self._leader] - position, self.ring_length)
-            if abs(float(gap.sum()) - self.ring_length) < 1e-6 * self.ring_length:
-                return self._leader, self._follower, gap - self.lengths[self._leader]
-        leader, follower, headway = leaders_on_ring(position, lanes, self.lengths, self.ring_length)
-        self.complete = single
-        self._leader, self._follower = (leader, follower) if single else (None, None)
+    def compute(self, unwrapped: FloatArray) -> tuple[IntArray, IntArray, FloatArray]:
+        """Leader index, follower index and headway (m) of every car.
+
+        Args:
+            unwrapped: entry position + distance driven of every car, m (not wrapped).
+        """
+        if self._order is not None:
+            leader, follower, offset, neg_length = self._order
+            headway = unwrapped[leader] - unwrapped + offset
+            length = self._one_length
+            if length is not None:
+                if headway.min() >= -length:
+                    return leader, follower, headway
+            elif not (headway < neg_length).any():
+                return leader, follower, headway
+        ring = self.ring_length
+        n = unwrapped.shape[0]
+        leader, follower, headway = leaders_on_ring(
+            np.mod(unwrapped, ring), np.zeros(n, dtype=np.int64), self.lengths, ring
+        )
+        self.complete = n >= 2
+        self._order = None
+        if self.complete:
+            ahead = unwrapped[leader] - unwrapped
+            wrap = ring * np.round((np.mod(ahead, ring) - ahead) / ring)
+            lead_length = self.lengths[leader]
+            self._order = (leader, follower, wrap - lead_length, -lead_length)
         return leader, follower, headway

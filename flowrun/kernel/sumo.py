@@ -88,7 +88,7 @@ def gui_available() -> bool:
 
 @dataclass(frozen=True)
 class FastCalls:
-    """The per-vehicle calls made every step, bound once.
+    """The calls made every step, bound once.
 
     libsumo's Python wrappers add a function layer over the compiled calls; on the hot path
     the compiled ones are used directly (same arguments, same results). TraCI keeps its own.
@@ -98,6 +98,10 @@ class FastCalls:
     get_distance: Callable[[str], float]
     get_position: Callable[[str], tuple[float, float]]
     slow_down: Callable[[str, float, float], None]
+    sim_step: Callable[[float], object]
+    sim_time: Callable[[], float]
+    colliding_number: Callable[[], int]
+    teleport_number: Callable[[], int]
 
     @staticmethod
     def of(api: Any) -> FastCalls:
@@ -109,9 +113,22 @@ class FastCalls:
                 raw.vehicle_getDistance,
                 raw.vehicle_getPosition,
                 raw.vehicle_slowDown,
+                raw.simulation_step,
+                raw.simulation_getTime,
+                raw.simulation_getCollidingVehiclesNumber,
+                raw.simulation_getStartingTeleportNumber,
             )
-        v = api.vehicle
-        return FastCalls(v.getSpeed, v.getDistance, v.getPosition, v.slowDown)
+        v, sim = api.vehicle, api.simulation
+        return FastCalls(
+            v.getSpeed,
+            v.getDistance,
+            v.getPosition,
+            v.slowDown,
+            sim.step,
+            sim.getTime,
+            sim.getCollidingVehiclesNumber,
+            sim.getStartingTeleportNumber,
+        )
 
 
 class SumoProcess:

@@ -8,15 +8,23 @@ just before the simulation step.
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Iterable, Sequence
+from itertools import repeat
 from typing import Any
 
 import numpy as np
 
 from flowrun.controllers.base import CarFollowingInputs
-from flowrun.kernel.snapshot import RingFollowing, VehicleTable
+from flowrun.kernel.snapshot import RingFollowing, VehicleTable, leaders_on_ring
 from flowrun.kernel.sumo import FastCalls
 from flowrun.networks.base import NetworkSpec
+
+_sum = np.add.reduce
+_consume = deque[object](maxlen=0).extend  # runs an iterator to its end, keeping nothing
+
+#: ``slowDown`` duration, s: shorter than a step, so the new speed holds at the next step.
+SLOW_DOWN_DURATION = 1e-3
 
 
 class VehicleKernel:
@@ -36,6 +44,7 @@ class VehicleKernel:
         self.read_xy = True
         n = table.size
         self._index = {vid: i for i, vid in enumerate(table.ids)}
+        self._all = slice(0, n)
         self._edges_cache: list[str] | None = [""] * n
         self._lane_pos = np.zeros(n)
         self._leader_ids: tuple[np.ndarray | None, list[str]] = (None, [])
@@ -48,7 +57,9 @@ class VehicleKernel:
         self.position = np.zeros(n)
         self.speed = np.zeros(n)
         self.prev_speed = np.zeros(n)
-        self.accel_real = np.zeros(n)
+        self._accel_real: np.ndarray | None = np.zeros(n)
+        self._reroute_wait = 0
+        self._max_step_distance = 1.0
         self._no_cmd = np.full(n, np.nan)
         self.accel_cmd = self._no_cmd.copy()
         self.last_cmd = np.full(n, np.nan)
@@ -72,6 +83,7 @@ class VehicleKernel:
         spec = self.spec
         self._edge_ids = [e.id for e in spec.edges]
         self._edge_pos = {e: i for i, e in enumerate(self._edge_ids)}
+        self._edge_names = np.array(self._edge_ids, dtype=object)
         self._starts = np.array([spec.edge_starts[e] for e in self._edge_ids])
         self._edge_speeds = np.array([e.speed for e in spec.edges])
         self._uniform_speed = bool(np.all(self._edge_speeds == self._edge_speeds[0]))
@@ -84,7 +96,14 @@ class VehicleKernel:
         self.speed_limit = np.full(self.table.size, self._edge_speeds[0])
         # A route runs once around the ring from its first edge, so its last edge is the one
         # before: ContinuousRouter gives a car its next loop when its odometer reaches it.
-        self._next_reroute = self._distance_to_route_end(start_idx, self._start_position)
+        self._next_reroute = np.where(
+            self.table.continuous,
+            self._distance_to_route_end(start_idx, self._start_position),
+            np.inf,
+        )
+        fastest = max(float(self._edge_speeds.max()), float(self.table.max_speeds.max(initial=0.0)))
+        self._max_step_distance = 2.0 * fastest * self.dt + 1e-9
+        self._reroute_wait = 0
         self._stale_edges = True
 
     def _distance_to_route_end(self, edge_idx: np.ndarray, position: np.ndarray) -> np.ndarray:
@@ -98,34 +117,37 @@ class VehicleKernel:
         the entry position plus the odometer (equal to SUMO's edge offset + lane position to
         ~1e-13 m); edges and lane positions follow from it when someone asks.
         """
-        v = self.api.vehicle
         fast = self._fast
         ids = self.table.ids
         self.prev_speed = self.speed
         speed = np.array(list(map(fast.get_speed, ids)), dtype=np.float64)
+        self._accel_real = None
         if self._multi_lane:
-            self.lanes = np.array(list(map(v.getLaneIndex, ids)), dtype=np.int64)
+            self.lanes = np.array(list(map(self.api.vehicle.getLaneIndex, ids)), dtype=np.int64)
         if self.read_xy:
             xy = np.array(list(map(fast.get_position, ids)), dtype=np.float64).reshape(-1, 2)
             self.x, self.y = xy[:, 0], xy[:, 1]
         if self.spec.closed:
             self.odometer = np.array(list(map(fast.get_distance, ids)), dtype=np.float64)
-            self.position = np.mod(self._start_position + self.odometer, self.spec.length)
+            unwrapped = self._start_position + self.odometer
+            self.position = np.mod(unwrapped, self.spec.length)
             self._stale_edges = True
             if not self._uniform_speed:
                 self.speed_limit = self._edge_speeds[self._edge_index()]
-            if self._any_continuous and (self.odometer >= self._next_reroute).any():
-                self._reroute()
-            self.leader, self.follower, self.headway = self._following.compute(
-                self.position, self.lanes
-            )
+            if self._any_continuous:
+                self._check_routes()
+            if self._multi_lane:
+                self.leader, self.follower, self.headway = leaders_on_ring(
+                    self.position, self.lanes, self.table.lengths, self.spec.length
+                )
+            else:
+                self.leader, self.follower, self.headway = self._following.compute(unwrapped)
         else:
-            self._update_open(v, ids)
+            self._update_open(self.api.vehicle, ids)
         if first:
             self.prev_speed = speed
         self.speed = speed
-        self.accel_real = (speed - self.prev_speed) / self.dt
-        if self._following.complete:
+        if not self._multi_lane and self._following.complete:
             self.leader_speed = speed[self.leader]
             self.follower_speed = speed[self.follower]
             self.follower_headway = self.headway[self.follower]
@@ -134,6 +156,13 @@ class VehicleKernel:
             self.leader_speed = np.where(has_lead, speed[self.leader], speed)
             self.follower_speed = np.where(has_fol, speed[self.follower], speed)
             self.follower_headway = np.where(has_fol, self.headway[self.follower], np.inf)
+
+    @property
+    def accel_real(self) -> np.ndarray:
+        """Acceleration realised over the last step, m/s^2 (computed when first asked)."""
+        if self._accel_real is None:
+            self._accel_real = (self.speed - self.prev_speed) / self.dt
+        return self._accel_real
 
     def _update_open(self, v: Any, ids: list[str]) -> None:
         """Generic path for open networks: edge and lane position straight from SUMO."""
@@ -158,8 +187,7 @@ class VehicleKernel:
         if self._stale_edges:
             idx = self._edge_index()
             self._lane_pos = self.position - self._starts[idx]
-            names = self._edge_ids
-            self._edges_cache = [names[i] for i in idx.tolist()]
+            self._edges_cache = self._edge_names[idx].tolist()
             self._stale_edges = False
 
     @property
@@ -175,9 +203,27 @@ class VehicleKernel:
         assert self._edges_cache is not None
         return self._edges_cache
 
+    def _check_routes(self) -> None:
+        """ContinuousRouter, checked only as often as needed.
+
+        No car can reach its route's last edge sooner than its remaining distance divided by
+        a bound on the distance per step (twice the fastest speed limit or vehicle maximum);
+        until then the check is skipped.
+        """
+        if self._reroute_wait:
+            self._reroute_wait -= 1
+            return
+        slack = self._next_reroute - self.odometer
+        if slack.min() <= 0.0:
+            self._reroute()
+            slack = self._next_reroute - self.odometer
+        nearest = float(slack.min())
+        wait = nearest / self._max_step_distance
+        self._reroute_wait = int(wait) if wait < 1e9 else 10**9
+
     def _reroute(self) -> None:
         """ContinuousRouter: a car that reached its route's last edge gets the next loop."""
-        due = np.flatnonzero(self.table.continuous & (self.odometer >= self._next_reroute))
+        due = np.flatnonzero(self.odometer >= self._next_reroute)
         for i in due.tolist():
             vid = self.table.ids[i]
             edge = self.api.vehicle.getRoadID(vid)  # SUMO's own view at the boundary
@@ -223,21 +269,19 @@ class VehicleKernel:
         v = self.api.vehicle
         ids = self.table.ids
         cmd = self.accel_cmd
-        finite = np.isfinite(cmd)
         slow_down = self._fast.slow_down
         # Flow's rule (v + a*dt), never below 0 nor above the lane's speed limit (with
         # speedMode 0 SUMO would let a commanded car exceed the limit).
-        if finite.all():  # the common case: every car commanded, no fancy indexing
+        if math.isfinite(_sum(cmd)):  # the common case: every car commanded, no indexing
             target = np.minimum(np.maximum(self.speed + cmd * self.dt, 0.0), self.speed_limit)
-            for vid, speed in zip(ids, target.tolist(), strict=True):
-                slow_down(vid, speed, 1e-3)
-        elif finite.any():
+            _consume(map(slow_down, ids, target.tolist(), repeat(SLOW_DOWN_DURATION)))
+        elif (finite := np.isfinite(cmd)).any():
             todo = np.flatnonzero(finite)
             target = np.minimum(
                 np.maximum(self.speed[todo] + cmd[todo] * self.dt, 0.0), self.speed_limit[todo]
             )
             for i, speed in zip(todo.tolist(), target.tolist(), strict=True):
-                slow_down(ids[i], speed, 1e-3)
+                slow_down(ids[i], speed, SLOW_DOWN_DURATION)
         for i, d in self._lane_change.items():
             edge = self._edge_by_id.get(self.edges[i])
             lanes = edge.lanes if edge is not None else 1
@@ -255,6 +299,11 @@ class VehicleKernel:
     # ------------------------------------------------------------------ controller inputs
     def inputs(self, idx: np.ndarray | slice, time: float) -> CarFollowingInputs:
         """The state a car-following controller needs, for the vehicles ``idx``."""
+        if isinstance(idx, slice) and idx == self._all:  # one group drives every car
+            return CarFollowingInputs(
+                self.speed, self.headway, self.leader_speed, self.follower_headway,
+                self.follower_speed, self.speed_limit, self.dt, time,
+            )  # fmt: skip
         return CarFollowingInputs(
             speed=self.speed[idx],
             headway=self.headway[idx],
