@@ -1,15 +1,24 @@
 #!/usr/bin/env bash
 # Instructions per step (valgrind callgrind): raw SUMO vs flowrun baseline on the Sugiyama ring.
-# Run from the repository root: bash bench/step_instructions.sh   (needs valgrind; ~3 min)
+# Run from the repository root: bash bench/step_instructions.sh   (needs valgrind; ~4 min)
+#
+# Each mode runs twice (500 and 2,500 steps); the difference / 2,000 is the cost of one step,
+# start-up cancelled out. The count is repeatable to the instruction only with: one BLAS
+# thread (OpenBLAS's idle threads spin and are counted), a fixed hash seed, and no address
+# randomisation (setarch -R) -- so all three are set here.
 set -euo pipefail
 PY=${PY:-.venv/bin/python}
+export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONHASHSEED=0
+NORAND=(setarch "$(uname -m)" -R)
+"${NORAND[@]}" true 2>/dev/null || NORAND=()
 count() {  # mode steps -> instructions of the whole process
-  valgrind --tool=callgrind --callgrind-out-file=/dev/null "$PY" bench/step_instructions.py "$1" "$2" 2>&1 \
+  "${NORAND[@]}" valgrind --tool=callgrind --callgrind-out-file=/dev/null "$PY" bench/step_instructions.py "$1" "$2" 2>&1 \
     | awk '/Collected/ {gsub(",", "", $4); print $4}'
 }
+"$PY" bench/step_instructions.py raw 10  # compile every module once, outside the counts
 for mode in raw exp rec; do
-  a=$(count "$mode" 300); b=$(count "$mode" 1300)
-  per=$(( (b - a) / 1000 ))
+  a=$(count "$mode" 500); b=$(count "$mode" 2500)
+  per=$(( (b - a) / 2000 ))
   echo "$mode: $per instructions/step"
   eval "per_$mode=$per"
 done

@@ -21,7 +21,7 @@ from flowrun.recording import (
     repair,
 )
 from flowrun.recording.frames import StepStats
-from flowrun.recording.synthetic import ring_frames
+from flowrun.recording.synthetic import ring_frames, step_stats
 
 META = {"flowrun_version": "0.1.0", "seed": "7", "config_name": "sugiyama", "config": "name: x\n"}
 ATTACH = {"config.yaml": b"name: x\n", "network.net.xml": b"<net/>"}
@@ -243,3 +243,20 @@ def test_truncation_at_any_offset_never_crashes(tmp_path: Path) -> None:
         counts.append(len(list(log.frames())))
         assert log.salvaged
     assert counts == sorted(counts) and 0 < counts[-1] <= 120
+
+
+def test_roster_version_counts_changes_of_values_not_of_objects(tmp_path: Path) -> None:
+    path = tmp_path / "roster.mcap"
+    frames = [f for f, _ in ring_frames(4, 8)]
+    frames[2] = dataclasses.replace(frames[2], ids=list(frames[2].ids))  # same values
+    frames[3] = dataclasses.replace(frames[3], is_rl=frames[3].is_rl.copy())  # same values
+    frames[4] = dataclasses.replace(frames[4], ids=["a", "b", "c", "d"])
+    frames[5] = dataclasses.replace(frames[5], ids=["a", "b", "c", "d"])  # new list, same
+    frames[6] = dataclasses.replace(frames[6], is_rl=np.ones(4, dtype=bool))
+    with McapRecorder(path, metadata={}, attachments={}) as rec:
+        for frame in frames:
+            rec.write(frame, step_stats(frame))
+    log = open_log(path)
+    assert [m.roster_version for m in log.vehicle_messages()] == [1, 1, 1, 1, 2, 2, 3, 4]
+    assert log.all_metadata["flowrun_roster"] == {"rosters": "4"}
+    assert [f.ids for f in log.frames()][4] == ["a", "b", "c", "d"]

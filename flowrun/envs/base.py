@@ -24,7 +24,7 @@ import gymnasium
 import numpy as np
 
 from flowrun.config.params import EnvParams, SumoParams
-from flowrun.envs.frames import snapshot_frame, snapshot_stats, with_reward
+from flowrun.envs.frames import snapshot_frame, snapshot_stats
 from flowrun.envs.render import render_ring
 from flowrun.envs.vehicles import GroupControl, build_controllers, build_table
 from flowrun.errors import ConfigError
@@ -198,11 +198,10 @@ class Env(gymnasium.Env):
         self.step_counter += 1
         obs = self._format_obs(self.get_state())
         reward = float(self.compute_reward(action, fail=crash))
-        if self.frames:
-            start = self._step_start
-            self.frames = [
-                (f, with_reward(s, reward) if s.step > start else s) for f, s in self.frames
-            ]
+        start = self._step_start
+        for _, stats in self.frames:  # this step's simulation steps get its reward
+            if stats.step > start:
+                stats.reward = reward
         self._step_start = self.k.simulation.step_count
         terminated = bool(crash)
         truncated = self.step_counter >= self.env_params.horizon
@@ -297,4 +296,3 @@ class Env(gymnasium.Env):
     def __del__(self) -> None:
         with contextlib.suppress(Exception):  # interpreter shutdown
             self.close()
-

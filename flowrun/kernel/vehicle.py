@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Iterable, Sequence
-from itertools import repeat
+from itertools import chain, repeat
 from typing import Any
 
 import numpy as np
@@ -21,6 +21,7 @@ from flowrun.kernel.sumo import FastCalls
 from flowrun.networks.base import NetworkSpec
 
 _sum = np.add.reduce
+_flatten = chain.from_iterable
 _consume = deque[object](maxlen=0).extend  # runs an iterator to its end, keeping nothing
 
 #: ``slowDown`` duration, s: shorter than a step, so the new speed holds at the next step.
@@ -120,15 +121,17 @@ class VehicleKernel:
         fast = self._fast
         ids = self.table.ids
         self.prev_speed = self.speed
-        speed = np.array(list(map(fast.get_speed, ids)), dtype=np.float64)
+        n = len(ids)
+        speed = np.fromiter(map(fast.get_speed, ids), np.float64, n)
         self._accel_real = None
         if self._multi_lane:
             self.lanes = np.array(list(map(self.api.vehicle.getLaneIndex, ids)), dtype=np.int64)
         if self.read_xy:
-            xy = np.array(list(map(fast.get_position, ids)), dtype=np.float64).reshape(-1, 2)
-            self.x, self.y = xy[:, 0], xy[:, 1]
+            # flattened first: numpy would otherwise inspect every (x, y) tuple's shape
+            xy = np.array(list(_flatten(map(fast.get_position, ids))), dtype=np.float64)
+            self.x, self.y = xy[0::2], xy[1::2]
         if self.spec.closed:
-            self.odometer = np.array(list(map(fast.get_distance, ids)), dtype=np.float64)
+            self.odometer = np.fromiter(map(fast.get_distance, ids), np.float64, n)
             unwrapped = self._start_position + self.odometer
             self.position = np.mod(unwrapped, self.spec.length)
             self._stale_edges = True

@@ -148,7 +148,8 @@ class McapLog:
                     f"{self.path} is not a readable MCAP file ({scan.damage}); expected a "
                     "log written by flowrun"
                 )
-            # Schemas/channels live inside the chunks: read them from the first intact one(s).
+            # Logs written by the mcap library keep schemas/channels inside the chunks (flowrun
+            # writes them before the first chunk): read them from the first intact chunk(s).
             for ref in scan.chunks:
                 try:
                     records_in = self._chunk_records(f, ref)

@@ -6,9 +6,8 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from mcap.writer import CompressionType, Writer
-
 from flowrun.errors import RecordingError
+from flowrun.recording.mcap_file import McapWriter
 from flowrun.recording.reader import open_log
 from flowrun.recording.schema import VEHICLES_TOPIC
 from flowrun.recording.writer import CHUNK_SIZE, PROFILE, media_type
@@ -53,14 +52,13 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
     end_ns: int | None = None
     dst.parent.mkdir(parents=True, exist_ok=True)
     with open(dst, "wb") as stream:
-        writer = Writer(stream, chunk_size=CHUNK_SIZE, compression=CompressionType.ZSTD)
-        writer.start(profile=PROFILE, library="flowrun-repair")
+        writer = McapWriter(
+            stream, profile=PROFILE, library="flowrun-repair", chunk_size=CHUNK_SIZE
+        )
         for name, data in log.all_metadata.items():
             writer.add_metadata(name, data)
         for name, blob in log.attachments.items():
-            writer.add_attachment(
-                create_time=0, log_time=0, name=name, media_type=media_type(name), data=blob
-            )
+            writer.add_attachment(name, media_type(name), blob)
         schema_ids: dict[int, int] = {}
         channel_ids: dict[int, int] = {}
         for schema, channel, message in log.messages():

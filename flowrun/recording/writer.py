@@ -7,20 +7,19 @@ import os
 import time
 from pathlib import Path
 from types import TracebackType
-from typing import IO
+from typing import IO, Any
 
-from mcap.well_known import MessageEncoding, SchemaEncoding
-from mcap.writer import CompressionType, Writer
+import numpy as np
 
 from flowrun.errors import RecordingError
 from flowrun.recording import schema
 from flowrun.recording.frames import StepStats, VehicleFrame
+from flowrun.recording.mcap_file import CHUNK_SIZE, McapWriter
 
 log = logging.getLogger(__name__)
 
 METADATA_NAME = "flowrun"
 PROFILE = "flowrun"
-CHUNK_SIZE = 4 * 1024 * 1024
 
 _MEDIA_TYPES = {
     ".yaml": "application/yaml",
@@ -53,6 +52,11 @@ class McapRecorder:
     :func:`flowrun.recording.open_log` salvages up to the last flush. :meth:`close` writes the
     summary and footer; it is idempotent and safe to call from a ``finally`` block.
 
+    Per step the frame is encoded by a :class:`~flowrun.recording.schema.FrameEncoder`
+    (protobuf bytes written directly, columns that repeat encoded once) and both messages
+    are appended to the open chunk of a :class:`~flowrun.recording.mcap_file.McapWriter`,
+    which compresses a chunk when it is full or flushed (``bench/record_write.py`` times it).
+
     Args:
         path: output file; its parent directory is created.
         metadata: key/value pairs stored in the ``flowrun`` metadata record (versions, seed,
@@ -79,40 +83,54 @@ class McapRecorder:
         self.record_every = int(record_every)
         self.flush_every_s = float(flush_every_s)
         self.frames_written = 0
+        # The roster as last seen: the objects (identity is checked first) and their values.
+        self._roster_objects: tuple[Any, Any, Any] = (None, None, None)
         self._roster: tuple[list[str], list[str], list[bool]] = ([], [], [])
         self._roster_version = 0
+        self._encoder = schema.FrameEncoder()
         self._closed = False
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._stream: IO[bytes] = open(self.path, "wb")  # noqa: SIM115 - closed in close()
         except OSError as err:
             raise RecordingError(f"cannot create MCAP log {self.path}: {err}") from err
-        self._writer = Writer(self._stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
-        self._writer.start(profile=PROFILE, library="flowrun")
-        meta = {str(k): str(v) for k, v in (metadata or {}).items()}
-        self._writer.add_metadata(METADATA_NAME, meta)
-        for name, data in (attachments or {}).items():
-            self._writer.add_attachment(
-                create_time=time.time_ns(),
-                log_time=0,
-                name=name,
-                media_type=media_type(name),
-                data=bytes(data),
+        try:
+            self._writer = McapWriter(
+                self._stream, profile=PROFILE, library="flowrun", chunk_size=chunk_size
             )
-        schema_bytes = schema.schema_data()
-        vehicles_schema = self._writer.register_schema(
-            schema.VEHICLES_TYPE, SchemaEncoding.Protobuf, schema_bytes
-        )
-        stats_schema = self._writer.register_schema(
-            schema.STATS_TYPE, SchemaEncoding.Protobuf, schema_bytes
-        )
-        self._vehicles = self._writer.register_channel(
-            schema.VEHICLES_TOPIC, MessageEncoding.Protobuf, vehicles_schema
-        )
-        self._stats = self._writer.register_channel(
-            schema.STATS_TOPIC, MessageEncoding.Protobuf, stats_schema
-        )
+            meta = {str(k): str(v) for k, v in (metadata or {}).items()}
+            self._writer.add_metadata(METADATA_NAME, meta)
+            for name, data in (attachments or {}).items():
+                self._writer.add_attachment(
+                    name, media_type(name), bytes(data), log_time=0, create_time=time.time_ns()
+                )
+            schema_bytes = schema.schema_data()
+            vehicles_schema = self._writer.register_schema(
+                schema.VEHICLES_TYPE, schema.ENCODING, schema_bytes
+            )
+            stats_schema = self._writer.register_schema(
+                schema.STATS_TYPE, schema.ENCODING, schema_bytes
+            )
+            self._vehicles = self._writer.register_channel(
+                schema.VEHICLES_TOPIC, schema.ENCODING, vehicles_schema
+            )
+            self._stats = self._writer.register_channel(
+                schema.STATS_TOPIC, schema.ENCODING, stats_schema
+            )
+        except BaseException:
+            self._stream.close()
+            raise
         self._last_flush = time.monotonic()
+
+    def _roster_changed(self, frame: VehicleFrame) -> bool:
+        """Whether ids/types/RL flags differ from the last frame's (values, not objects)."""
+        self._roster_objects = (frame.ids, frame.types, frame.is_rl)
+        ids, types, rl = self._roster
+        is_rl = np.asarray(frame.is_rl).tolist()
+        if frame.ids == ids and frame.types == types and is_rl == rl:
+            return False
+        self._roster = (list(frame.ids), list(frame.types), is_rl)
+        return True
 
     def write(self, frame: VehicleFrame, stats: StepStats) -> bool:
         """Log one step unless thinned out by ``record_every``.
@@ -122,24 +140,24 @@ class McapRecorder:
         """
         if self._closed:
             raise RecordingError(f"MCAP log {self.path} is already closed")
-        if frame.step % self.record_every:
+        step = frame.step
+        if step % self.record_every:
             return False
-        stamp = to_ns(frame.time)
-        seq = frame.step & 0xFFFFFFFF
-        is_rl = frame.is_rl.tolist()
-        ids, types, rl = self._roster
-        if frame.ids != ids or frame.types != types or is_rl != rl:
-            self._roster = (list(frame.ids), list(frame.types), is_rl)
+        stamp = round(frame.time * 1e9)  # to_ns(), inline
+        seq = step & 0xFFFFFFFF
+        # The kernel passes the same roster objects while the roster holds: check identity
+        # first, and compare values only when an object changed.
+        ids, types, is_rl = self._roster_objects
+        changed = frame.ids is not ids or frame.types is not types or frame.is_rl is not is_rl
+        if changed and self._roster_changed(frame):
             self._roster_version = self._roster_version % 0xFFFFFFFF + 1
-        writer = self._writer
+        add = self._writer.add_message
         # Stats first: if a crash cuts between the two, every salvaged frame has its stats.
-        writer.add_message(self._stats, stamp, schema.encode_stats(stats), stamp, seq)
-        writer.add_message(
-            self._vehicles, stamp, schema.encode_frame(frame, self._roster_version), stamp, seq
-        )
+        add(self._stats, stamp, schema.encode_stats(stats), stamp, seq)
+        add(self._vehicles, stamp, self._encoder.encode(frame, self._roster_version), stamp, seq)
         self.frames_written += 1
         now = time.monotonic()
-        if self.frames_written == 1 or now - self._last_flush >= self.flush_every_s:
+        if now - self._last_flush >= self.flush_every_s or self.frames_written == 1:
             self.flush()
             self._last_flush = now
         return True
