@@ -207,6 +207,19 @@ def report(ring: Ring, times: dict[str, list[float]]) -> None:
         f"work per vehicle (b-a)/n = {(med['b'] - floor) / ring.vehicles:.2f} µs, "
         f"recording (c-b)/n = {(med['c'] - med['b']) / ring.vehicles:.2f} µs"
     )
+    # Two load-robust views of the same runs: the ratio within each repetition (a and b ran
+    # seconds apart), and the fastest repetition of each mode (the least disturbed one).
+    per_rep = {k: [x / y for x, y in zip(times[k], times["a"], strict=True)] for k in "bc"}
+    best = {k: min(times[k]) for k in "abc"}
+    print(
+        "  per-repetition ratios, median (range): "
+        + ", ".join(
+            f"{k}/a = {statistics.median(v):.2f} ({min(v):.2f}-{max(v):.2f})"
+            for k, v in per_rep.items()
+        )
+        + f"; fastest repetitions: b/a = {best['b'] / best['a']:.2f}, "
+        f"c/a = {best['c'] / best['a']:.2f}"
+    )
 
 
 # --- memory (each in a fresh child process, so nothing else inflates the peak) -------------

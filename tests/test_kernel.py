@@ -126,16 +126,21 @@ def ring_gap(a: float, b: float, length: float) -> float:
 def test_getters_agree_with_raw_libsumo(config: Any) -> None:
     env = make_env(config("sugiyama"))
     try:
+        env.read_xy = True  # as when recording: x, y read every step
         env.reset(seed=0)
         api = env.k.process.api  # the libsumo module of this simulation
         starts = env.k.network.total_edgestarts_dict
         vk = env.k.vehicle
         checked = 0
         for step in range(1, 901):
+            before = dict(zip(vk.get_ids(), vk.get_speed(vk.get_ids()), strict=True))
             env.step(None)
             if step % 150:
                 continue
             for vid in vk.get_ids():
+                assert vk.get_2d_position(vid) == tuple(api.vehicle.getPosition(vid))
+                realised = (api.vehicle.getSpeed(vid) - before[vid]) / 0.1
+                assert vk.get_realized_accel(vid) == pytest.approx(realised, abs=1e-12)
                 edge = api.vehicle.getRoadID(vid)
                 x = starts[edge] + api.vehicle.getLanePosition(vid)
                 assert ring_gap(vk.get_x_by_id(vid), x, env.k.network.length()) < 1e-9

@@ -7,11 +7,20 @@ import math
 import numpy as np
 import pytest
 
-from flowrun.envs.frames import speed_stats
+from flowrun.envs.frames import StepRecord, batch_stats, speed_stats
+from flowrun.experiment.metrics import RunAccumulator
 
 
-@pytest.mark.parametrize("n", [1, 2, 22, 64, 65, 2200])
-def test_speed_stats_equal_numpy_on_both_sides_of_the_small_ring_shortcut(n: int) -> None:
+def records(sizes: list[int], seed: int = 0) -> list[StepRecord]:
+    rng = np.random.default_rng(seed)
+    return [
+        StepRecord(step, step / 10, rng.uniform(0.0, 30.0, n), step % 3 == 0, 0, None, step * 0.5)
+        for step, n in enumerate(sizes)
+    ]
+
+
+@pytest.mark.parametrize("n", [1, 2, 22, 2200])
+def test_speed_stats_equal_numpy(n: int) -> None:
     speed = np.random.default_rng(n).uniform(0.0, 30.0, n)
     count, mean, low, high, std = speed_stats(speed)
     assert count == n
@@ -20,11 +29,38 @@ def test_speed_stats_equal_numpy_on_both_sides_of_the_small_ring_shortcut(n: int
     assert std == pytest.approx(float(np.std(speed)), rel=1e-12, abs=1e-13)
 
 
-def test_speed_stats_of_a_uniform_flow_have_zero_spread() -> None:
-    assert speed_stats(np.full(22, 3.454)) == (22, 3.454, 3.454, 3.454, 0.0)
-
-
 def test_speed_stats_of_an_empty_network_are_nan() -> None:
     count, *rest = speed_stats(np.zeros(0))
     assert count == 0
     assert all(math.isnan(x) for x in rest)
+
+
+@pytest.mark.parametrize("sizes", [[22] * 300, [3, 5, 0, 4]], ids=["ring", "changing"])
+def test_a_batch_holds_each_steps_own_statistics(sizes: list[int]) -> None:
+    recs = records(sizes)
+    rows = batch_stats(recs).rows()
+    assert [r.step for r in rows] == list(range(len(sizes)))
+    for rec, row in zip(recs, rows, strict=True):
+        count, mean, low, high, std = speed_stats(rec.speed)
+        assert (row.num_vehicles, row.time, row.reward) == (count, rec.time, rec.reward)
+        assert (row.collisions, row.teleports) == (rec.collisions, 0)
+        if count:
+            assert (row.min_speed, row.max_speed) == (low, high)
+            assert row.mean_speed == pytest.approx(mean, rel=1e-13)
+            assert row.speed_std == pytest.approx(std, rel=1e-12, abs=1e-13)
+        else:
+            assert math.isnan(row.mean_speed) and math.isnan(row.speed_std)
+
+
+def test_batches_fold_into_the_same_run_metrics_as_one_batch() -> None:
+    recs = records([22] * 1000, seed=4)
+    whole, pieces = RunAccumulator(), RunAccumulator()
+    whole.add_batch(batch_stats(recs))
+    for i in range(0, 1000, 256):
+        pieces.add_batch(batch_stats(recs[i : i + 256]))
+    assert pieces.result(0, 1.0) == whole.result(0, 1.0)
+    means = [float(np.mean(r.speed)) for r in recs]
+    result = whole.result(0, 1.0)
+    assert result.steps == 1000 and result.collisions == 334
+    assert result.last_half_mean_speed == pytest.approx(np.mean(means[500:]), rel=1e-12)
+    assert result.min_speed == min(float(r.speed.min()) for r in recs)

@@ -12,10 +12,8 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import math
 import shutil
 import tempfile
-from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, ClassVar
@@ -24,18 +22,15 @@ import gymnasium
 import numpy as np
 
 from flowrun.config.params import EnvParams, SumoParams
-from flowrun.envs.frames import snapshot_frame, snapshot_stats
+from flowrun.envs.frames import StepRecord, step_record
 from flowrun.envs.render import render_ring
 from flowrun.envs.vehicles import GroupControl, build_controllers, build_table
 from flowrun.errors import ConfigError
 from flowrun.kernel import Kernel
 from flowrun.kernel.sumo import gui_available
 from flowrun.networks.base import Network
-from flowrun.recording.frames import StepStats, VehicleFrame
 
 log = logging.getLogger(__name__)
-
-StepListener = Callable[[VehicleFrame, StepStats], None]
 
 
 def check_additional_params(cls: type, env_params: EnvParams) -> None:
@@ -115,12 +110,12 @@ class Env(gymnasium.Env):
         self.record_frames = False
         self.read_xy = False
         self.collect_stats = False
-        self.frames: list[tuple[VehicleFrame | None, StepStats]] = []
+        #: this episode's simulation steps not yet taken by ``Experiment`` (when it collects)
+        self.records: list[StepRecord] = []
         self.reward_terms: dict[str, float] = {}
         self._ctrl_rng = np.random.default_rng(0)
         self._needs_reset = True
         self._closed = False
-        self._step_start = 0
         self._space_cache: tuple[gymnasium.Space[Any], gymnasium.Space[Any]] | None = None
         self._bounds: tuple[np.ndarray, np.ndarray] | tuple[()] | None = None
 
@@ -164,7 +159,7 @@ class Env(gymnasium.Env):
             control.controller.reset(control.index.size)
         self.step_counter = 0
         self.time_counter = 0
-        self.frames = []
+        self.records = []
         self._needs_reset = False
         self._emit_frame()
         for _ in range(self.env_params.warmup_steps):
@@ -172,7 +167,6 @@ class Env(gymnasium.Env):
             if self.k.simulation.check_collision():
                 break
         self.step_counter = 0
-        self._step_start = self.k.simulation.step_count
         obs = self._format_obs(self.get_state())
         return obs, self._info(crash=False)
 
@@ -190,6 +184,7 @@ class Env(gymnasium.Env):
         # Flow rewards the action as applied: clipped to the action space when clip_actions.
         action = None if action is None else self.clip_actions(action)
         crash = False
+        first = len(self.records)
         for _ in range(self.env_params.sims_per_step):
             self._simulate(action)
             crash = self.k.simulation.check_collision()
@@ -198,11 +193,9 @@ class Env(gymnasium.Env):
         self.step_counter += 1
         obs = self._format_obs(self.get_state())
         reward = float(self.compute_reward(action, fail=crash))
-        start = self._step_start
-        for _, stats in self.frames:  # this step's simulation steps get its reward
-            if stats.step > start:
-                stats.reward = reward
-        self._step_start = self.k.simulation.step_count
+        records = self.records
+        for i in range(first, len(records)):  # this step's simulation steps get its reward
+            records[i].reward = reward
         terminated = bool(crash)
         truncated = self.step_counter >= self.env_params.horizon
         if terminated or truncated:
@@ -256,7 +249,8 @@ class Env(gymnasium.Env):
     def _format_obs(self, obs: Any) -> Any:
         space = self._spaces()[1]
         if isinstance(space, gymnasium.spaces.Box):
-            return np.asarray(obs, dtype=space.dtype).reshape(space.shape)
+            obs = np.asarray(obs, dtype=space.dtype)
+            return obs if obs.shape == space.shape else obs.reshape(space.shape)
         return obs
 
     def _info(self, crash: bool) -> dict[str, Any]:
@@ -271,12 +265,10 @@ class Env(gymnasium.Env):
         }
 
     def _emit_frame(self) -> None:
-        """Queue this simulation step's frame/stats; ``step`` fills in the reward."""
-        if not (self.record_frames or self.collect_stats):
-            return
-        step = self.k.simulation.step_count
-        frame = snapshot_frame(self.k, step) if self.record_frames else None
-        self.frames.append((frame, snapshot_stats(self.k, step, math.nan)))
+        """Queue this simulation step's record (and frame); ``step`` fills in the reward."""
+        if self.record_frames or self.collect_stats:
+            step = self.k.simulation.step_count
+            self.records.append(step_record(self.k, step, self.record_frames))
 
     def render(self) -> Any:
         """A top-down RGB picture of the ring (``render_mode="rgb_array"``), else ``None``."""

@@ -1,9 +1,9 @@
-"""Copy the kernel's per-step snapshot into the log's frame types."""
+"""Copy the kernel's per-step snapshot into step records, frames and per-step statistics."""
 
 from __future__ import annotations
 
 import math
-from operator import mul
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -12,6 +12,7 @@ from flowrun.kernel import Kernel
 from flowrun.recording.frames import StepStats, VehicleFrame
 
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
 
 
 def snapshot_frame(k: Kernel, step: int) -> VehicleFrame:
@@ -42,37 +43,113 @@ def snapshot_frame(k: Kernel, step: int) -> VehicleFrame:
     )
 
 
-def snapshot_stats(k: Kernel, step: int, reward: float) -> StepStats:
-    """Aggregates of the current step (see :func:`speed_stats`)."""
+@dataclass(slots=True)
+class StepRecord:
+    """One simulation step as the environment queues it: raw values, aggregated later.
+
+    Attributes:
+        step: simulation step index since the episode started.
+        time: simulation time, s.
+        speed: every vehicle's speed, m/s (the kernel's array: never written into).
+        collisions: collisions SUMO reported in this step.
+        teleports: teleports SUMO started in this step.
+        frame: the full vehicle frame when recording, else ``None``.
+        reward: reward of the RL step this simulation step belongs to (set by ``Env.step``).
+    """
+
+    step: int
+    time: float
+    speed: FloatArray
+    collisions: int
+    teleports: int
+    frame: VehicleFrame | None
+    reward: float = math.nan
+
+
+def step_record(k: Kernel, step: int, with_frame: bool) -> StepRecord:
+    """The current step's record (and frame, when asked)."""
     sim = k.simulation
-    n, mean, low, high, std = speed_stats(k.vehicle.speed)
-    return StepStats(
-        step, sim.time, n, mean, low, high, std, reward, sim.step_collisions, sim.step_teleports
+    frame = snapshot_frame(k, step) if with_frame else None
+    return StepRecord(
+        step, sim.time, k.vehicle.speed, sim.step_collisions, sim.step_teleports, frame
     )
 
 
-#: Up to this many vehicles, plain Python beats numpy's per-call overhead.
-_SMALL = 64
+@dataclass(frozen=True)
+class StatsBatch:
+    """Per-step aggregates of consecutive records, one array entry per step (speeds in m/s)."""
+
+    step: IntArray
+    time: FloatArray
+    num_vehicles: IntArray
+    mean_speed: FloatArray
+    min_speed: FloatArray
+    max_speed: FloatArray
+    speed_std: FloatArray
+    reward: FloatArray
+    collisions: IntArray
+    teleports: IntArray
+
+    def __len__(self) -> int:
+        return int(self.step.size)
+
+    def rows(self) -> list[StepStats]:
+        """The batch as :class:`StepStats` objects, step by step."""
+        columns = (
+            self.step, self.time, self.num_vehicles, self.mean_speed, self.min_speed,
+            self.max_speed, self.speed_std, self.reward, self.collisions, self.teleports,
+        )  # fmt: skip
+        return [StepStats(*row) for row in zip(*(c.tolist() for c in columns), strict=True)]
+
+
+def batch_stats(records: list[StepRecord]) -> StatsBatch:
+    """Count, mean, min, max and population standard deviation of speed for every record.
+
+    With the same number of vehicles in every record (a ring), one numpy call per statistic
+    covers the whole batch; otherwise each step is aggregated on its own. Steps without
+    vehicles get ``nan`` statistics.
+    """
+    sizes = {r.speed.size for r in records}
+    aggregates: tuple[np.ndarray, ...]
+    if len(sizes) == 1 and 0 not in sizes:
+        speed = np.stack([r.speed for r in records])
+        n = speed.shape[1]
+        mean_speed = np.add.reduce(speed, axis=1) / n
+        dev = speed - mean_speed[:, None]
+        aggregates = (
+            np.full(len(records), n, dtype=np.int64),
+            mean_speed,
+            np.minimum.reduce(speed, axis=1),
+            np.maximum.reduce(speed, axis=1),
+            np.sqrt(np.add.reduce(dev * dev, axis=1) / n),
+        )
+    else:
+        table = np.array([speed_stats(r.speed) for r in records], dtype=np.float64).reshape(-1, 5)
+        aggregates = (table[:, 0].astype(np.int64), *(table[:, j] for j in range(1, 5)))
+    count, mean, low, high, std = aggregates
+    return StatsBatch(
+        np.array([r.step for r in records], dtype=np.int64),
+        np.array([r.time for r in records], dtype=np.float64),
+        count,
+        mean,
+        low,
+        high,
+        std,
+        np.array([r.reward for r in records], dtype=np.float64),
+        np.array([r.collisions for r in records], dtype=np.int64),
+        np.array([r.teleports for r in records], dtype=np.int64),
+    )
 
 
 def speed_stats(speed: FloatArray) -> tuple[int, float, float, float, float]:
-    """Count, mean, min, max and population standard deviation of speeds (m/s).
+    """Count, mean, min, max and population standard deviation of one step's speeds (m/s).
 
     No vehicles: count 0 and ``nan`` elsewhere.
     """
     n = int(speed.size)
     if not n:
         return 0, math.nan, math.nan, math.nan, math.nan
-    if n > _SMALL:
-        mean = float(_add(speed)) / n
-        dev = speed - mean
-        return n, mean, float(_min(speed)), float(_max(speed)), math.sqrt(float(dev @ dev) / n)
-    values = speed.tolist()
-    mean = math.fsum(values) / n
-    devs = [x - mean for x in values]
-    return n, mean, min(values), max(values), math.sqrt(math.fsum(map(mul, devs, devs)) / n)
-
-
-_add = np.add.reduce
-_min = np.minimum.reduce
-_max = np.maximum.reduce
+    mean = float(np.add.reduce(speed)) / n
+    dev = speed - mean
+    low, high = float(np.minimum.reduce(speed)), float(np.maximum.reduce(speed))
+    return n, mean, low, high, math.sqrt(float(dev @ dev) / n)

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from flowrun.recording.frames import StepStats
+from flowrun.envs.frames import StatsBatch
 
 
 @dataclass(frozen=True)
@@ -66,16 +66,18 @@ class RunAccumulator:
         self.collisions = 0
         self.teleports = 0
 
-    def add(self, stats: StepStats) -> None:
-        """Fold one step in."""
-        self.steps += 1
-        self.time = stats.time
-        self.mean.append(stats.mean_speed)
-        self.std.append(stats.speed_std)
-        self.min_speed = min(self.min_speed, stats.min_speed)
-        self.max_speed = max(self.max_speed, stats.max_speed)
-        self.collisions += stats.collisions
-        self.teleports += stats.teleports
+    def add_batch(self, batch: StatsBatch) -> None:
+        """Fold in the statistics of consecutive steps."""
+        if not len(batch):
+            return
+        self.steps += len(batch)
+        self.time = float(batch.time[-1])
+        self.mean.extend(batch.mean_speed.tolist())
+        self.std.extend(batch.speed_std.tolist())
+        self.min_speed = min(self.min_speed, float(np.fmin.reduce(batch.min_speed)))
+        self.max_speed = max(self.max_speed, float(np.fmax.reduce(batch.max_speed)))
+        self.collisions += int(batch.collisions.sum())
+        self.teleports += int(batch.teleports.sum())
 
     def result(self, run: int, episode_return: float) -> RunMetrics:
         """The metrics of everything added so far."""

@@ -10,6 +10,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from flowrun.envs.base import Env
+from flowrun.envs.frames import batch_stats
 from flowrun.experiment.metrics import RunAccumulator, RunMetrics
 from flowrun.recording.frames import StepStats, VehicleFrame
 
@@ -25,6 +26,10 @@ class FrameSink(Protocol):
     def close(self) -> None:
         """Finish the file (idempotent)."""
 
+
+#: Steps queued before their statistics are computed (in one numpy batch) and logged: a hard
+#: kill loses at most these beyond the recorder's last flush; Ctrl-C/SIGTERM lose nothing.
+DRAIN_EVERY = 256
 
 SinkFactory = Callable[[int], FrameSink | None]
 Progress = Callable[[int, int], None]
@@ -86,21 +91,24 @@ class Experiment:
             try:
                 obs, _ = env.reset(seed=None if seed is None else seed + run)
                 sink = self.sink_factory(run) if self.sink_factory else None
-                self._drain(sink, stats)
                 for step in range(num_steps):
                     action = rl_actions(obs) if rl_actions is not None else None
                     obs, reward, terminated, truncated, _ = env.step(action)
-                    self._drain(sink, stats)
                     ret += reward
                     rewards.append(reward)
+                    if len(env.records) >= DRAIN_EVERY:
+                        self._drain(sink, stats)
                     if self.progress is not None:
                         self.progress(run, step + 1)
                     if terminated or truncated:
                         break
             finally:
-                if sink is not None:
-                    sink.close()
-                self.metrics.append(stats.result(run, ret))
+                try:
+                    self._drain(sink, stats)  # also when interrupted: the log keeps every step
+                finally:
+                    if sink is not None:
+                        sink.close()
+                    self.metrics.append(stats.result(run, ret))
             returns.append(ret)
             per_step.append(rewards.tolist())
         velocities = [m.mean_speed for m in self.metrics]
@@ -114,8 +122,14 @@ class Experiment:
         }
 
     def _drain(self, sink: FrameSink | None, stats: RunAccumulator) -> None:
-        for frame, step_stats in self.env.frames:
-            stats.add(step_stats)
-            if sink is not None and frame is not None:
-                sink.write(frame, step_stats)
-        self.env.frames = []
+        """Aggregate the queued steps in one batch, fold them in, and write their frames."""
+        records = self.env.records
+        if not records:
+            return
+        self.env.records = []
+        batch = batch_stats(records)
+        stats.add_batch(batch)
+        if sink is not None:
+            for record, step_stats in zip(records, batch.rows(), strict=True):
+                if record.frame is not None:
+                    sink.write(record.frame, step_stats)
