@@ -166,6 +166,32 @@ def test_getters_agree_with_raw_libsumo(config: Any) -> None:
 
 
 @pytest.mark.sumo
+@pytest.mark.parametrize("lanes", [1, 2])
+def test_positions_placed_on_the_lane_shapes_equal_sumos(config: Any, lanes: int) -> None:
+    # What a recorded frame's x/y are computed with (a batch of steps at once) against
+    # libsumo's getPosition, car by car, while the cars drive around the ring (and, on two
+    # lanes, change lanes).
+    env = make_env(config("sugiyama", f"network.lanes={lanes}", "network.length=260"))
+    try:
+        env.reset(seed=0)
+        api = env.k.process.api
+        vk = env.k.vehicle
+        place = vk.xy_placer()
+        worst = 0.0
+        for step in range(1, 1201):
+            env.step(None)
+            if step % 100:
+                continue
+            x, y = place(vk.position[None, :], vk.lanes[None, :])
+            for i, vid in enumerate(vk.get_ids()):
+                sx, sy = api.vehicle.getPosition(vid)
+                worst = max(worst, abs(x[0, i] - sx), abs(y[0, i] - sy))
+        assert worst < 1e-9
+    finally:
+        env.close()
+
+
+@pytest.mark.sumo
 def test_continuous_router_keeps_cars_circling_for_5000_steps(config: Any) -> None:
     # 4 cars on a short ring lap it dozens of times; a length that is not a multiple of
     # 0.04 m also checks that SUMO's lanes add up to the ring exactly (no drift per lap).

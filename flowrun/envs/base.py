@@ -28,6 +28,7 @@ from flowrun.envs.vehicles import GroupControl, build_controllers, build_table
 from flowrun.errors import ConfigError
 from flowrun.kernel import Kernel
 from flowrun.kernel.sumo import gui_available
+from flowrun.kernel.vehicle import XYPlacer
 from flowrun.networks.base import Network
 
 log = logging.getLogger(__name__)
@@ -117,6 +118,7 @@ class Env(gymnasium.Env):
         self._needs_reset = True
         self._closed = False
         self._space_cache: tuple[gymnasium.Space[Any], gymnasium.Space[Any]] | None = None
+        self._place_xy: XYPlacer | None = None
         self._bounds: tuple[np.ndarray, np.ndarray] | tuple[()] | None = None
 
     # ------------------------------------------------------------------ Flow's hooks
@@ -154,7 +156,17 @@ class Env(gymnasium.Env):
         sumo_seed = int(self.np_random.integers(2**31 - 1))
         self._ctrl_rng = np.random.default_rng(int(self.np_random.integers(2**63 - 1)))
         self.k.sim_params = replace(self.sim_params, seed=sumo_seed)
-        self.k.reset(self.network, table, read_xy=self.read_xy or self.record_frames)
+        # Recording on a ring: x/y of the logged frames come from the lane shapes, a whole
+        # batch of steps at once (take_records), instead of a getter per car and step.
+        closed = self.network.spec.closed
+        self.k.reset(
+            self.network, table, read_xy=self.read_xy or (self.record_frames and not closed)
+        )
+        self._place_xy = (
+            self.k.vehicle.xy_placer()
+            if self.record_frames and closed and not self.read_xy
+            else None
+        )
         for control in self.controls:
             control.controller.reset(control.index.size)
         self.step_counter = 0
@@ -263,6 +275,21 @@ class Env(gymnasium.Env):
             "time": self.k.simulation.time,
             "reward_terms": dict(self.reward_terms),
         }
+
+    def take_records(self) -> list[StepRecord]:
+        """Hand over the queued step records (frames completed) and start a new queue."""
+        records, self.records = self.records, []
+        frames = [r.frame for r in records if r.frame is not None]
+        if self._place_xy is not None and frames:
+            if len({f.position.size for f in frames}) == 1:
+                position = np.stack([f.position for f in frames])
+                x, y = self._place_xy(position, np.stack([f.lanes for f in frames]))
+                for frame, fx, fy in zip(frames, x, y, strict=True):
+                    frame.x, frame.y = fx, fy
+            else:
+                for frame in frames:
+                    frame.x, frame.y = self._place_xy(frame.position, frame.lanes)
+        return records
 
     def _emit_frame(self) -> None:
         """Queue this simulation step's record (and frame); ``step`` fills in the reward."""

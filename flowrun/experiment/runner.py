@@ -123,10 +123,9 @@ class Experiment:
 
     def _drain(self, sink: FrameSink | None, stats: RunAccumulator) -> None:
         """Aggregate the queued steps in one batch, fold them in, and write their frames."""
-        records = self.env.records
-        if not records:
+        if not self.env.records:
             return
-        self.env.records = []
+        records = self.env.take_records()
         batch = batch_stats(records)
         stats.add_batch(batch)
         if sink is not None:
