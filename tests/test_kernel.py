@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -10,7 +11,10 @@ import pytest
 
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError
+from flowrun.experiment.runner import Experiment
 from flowrun.kernel.snapshot import RingFollowing, leaders_on_ring
+from flowrun.recording.reader import open_log
+from flowrun.recording.writer import McapRecorder
 
 INF = math.inf
 
@@ -176,13 +180,16 @@ def test_positions_placed_on_the_lane_shapes_equal_sumos(config: Any, lanes: int
         env.reset(seed=0)
         api = env.k.process.api
         vk = env.k.vehicle
-        place = vk.xy_placer()
+        placement = vk.placement()
         worst = 0.0
         for step in range(1, 1201):
             env.step(None)
             if step % 100:
                 continue
-            x, y = place(vk.position[None, :], vk.lanes[None, :])
+            x, y = placement.xy(vk.position[None, :], vk.lanes[None, :])
+            edge, lane_pos = placement.locate(vk.position)
+            assert placement.edge_names(edge) == vk.edges
+            assert lane_pos.tolist() == vk.lane_pos.tolist()
             for i, vid in enumerate(vk.get_ids()):
                 sx, sy = api.vehicle.getPosition(vid)
                 worst = max(worst, abs(x[0, i] - sx), abs(y[0, i] - sy))
@@ -265,3 +272,30 @@ def test_render_rgb_array_draws_the_ring_and_cars(config: Any) -> None:
     assert road.sum() > 1000
     cars = ~background & ~road & (pixels[:, 0] > 150)  # red-to-green speed colours
     assert cars.sum() > 22 * 10
+
+
+@pytest.mark.sumo
+def test_frames_completed_in_batches_equal_frames_read_step_by_step(
+    config: Any, tmp_path: Path
+) -> None:
+    # Recording derives edges, lane positions, x/y and realised accelerations for 256 steps
+    # at a time; reading x/y from SUMO every step (env.read_xy) takes the per-step path.
+    def frames(per_step: bool) -> list[Any]:
+        env = make_env(config("sugiyama", "env.horizon=600"))
+        env.read_xy = per_step
+        path = tmp_path / f"{per_step}.mcap"
+        try:
+            sink = lambda run: McapRecorder(path, metadata={}, attachments={})  # noqa: E731
+            Experiment(env, sink_factory=sink).run(1, 600, seed=0)
+        finally:
+            env.close()
+        return list(open_log(path).frames())
+
+    batched, per_step = frames(False), frames(True)
+    assert len(batched) == len(per_step) == 601
+    for a, b in zip(batched, per_step, strict=True):
+        assert a.edges == b.edges
+        for column in ("lane_pos", "speed", "accel_real", "headway", "position"):
+            assert getattr(a, column).tolist() == getattr(b, column).tolist(), column
+        assert np.abs(a.x - b.x).max() < 1e-9 and np.abs(a.y - b.y).max() < 1e-9
+    assert {e for f in batched for e in f.edges} == {"bottom", "right", "top", "left"}

@@ -22,13 +22,13 @@ import gymnasium
 import numpy as np
 
 from flowrun.config.params import EnvParams, SumoParams
-from flowrun.envs.frames import StepRecord, step_record
+from flowrun.envs.frames import StepRecord, complete_frames, step_record
 from flowrun.envs.render import render_ring
 from flowrun.envs.vehicles import GroupControl, build_controllers, build_table
 from flowrun.errors import ConfigError
 from flowrun.kernel import Kernel
+from flowrun.kernel.geometry import RingPlacement
 from flowrun.kernel.sumo import gui_available
-from flowrun.kernel.vehicle import XYPlacer
 from flowrun.networks.base import Network
 
 log = logging.getLogger(__name__)
@@ -118,7 +118,7 @@ class Env(gymnasium.Env):
         self._needs_reset = True
         self._closed = False
         self._space_cache: tuple[gymnasium.Space[Any], gymnasium.Space[Any]] | None = None
-        self._place_xy: XYPlacer | None = None
+        self._placement: RingPlacement | None = None
         self._bounds: tuple[np.ndarray, np.ndarray] | tuple[()] | None = None
 
     # ------------------------------------------------------------------ Flow's hooks
@@ -156,17 +156,15 @@ class Env(gymnasium.Env):
         sumo_seed = int(self.np_random.integers(2**31 - 1))
         self._ctrl_rng = np.random.default_rng(int(self.np_random.integers(2**63 - 1)))
         self.k.sim_params = replace(self.sim_params, seed=sumo_seed)
-        # Recording on a ring: x/y of the logged frames come from the lane shapes, a whole
-        # batch of steps at once (take_records), instead of a getter per car and step.
+        # Recording on a ring: edges, lane positions, x/y (from the lane shapes, not a getter
+        # per car and step) and realised accelerations of the logged frames are derived for
+        # a whole batch of steps at once (take_records).
         closed = self.network.spec.closed
         self.k.reset(
             self.network, table, read_xy=self.read_xy or (self.record_frames and not closed)
         )
-        self._place_xy = (
-            self.k.vehicle.xy_placer()
-            if self.record_frames and closed and not self.read_xy
-            else None
-        )
+        deferred = self.record_frames and closed and not self.read_xy
+        self._placement = self.k.vehicle.placement() if deferred else None
         for control in self.controls:
             control.controller.reset(control.index.size)
         self.step_counter = 0
@@ -279,23 +277,16 @@ class Env(gymnasium.Env):
     def take_records(self) -> list[StepRecord]:
         """Hand over the queued step records (frames completed) and start a new queue."""
         records, self.records = self.records, []
-        frames = [r.frame for r in records if r.frame is not None]
-        if self._place_xy is not None and frames:
-            if len({f.position.size for f in frames}) == 1:
-                position = np.stack([f.position for f in frames])
-                x, y = self._place_xy(position, np.stack([f.lanes for f in frames]))
-                for frame, fx, fy in zip(frames, x, y, strict=True):
-                    frame.x, frame.y = fx, fy
-            else:
-                for frame in frames:
-                    frame.x, frame.y = self._place_xy(frame.position, frame.lanes)
+        if self._placement is not None:
+            complete_frames(records, self._placement, self.k.vehicle.dt)
         return records
 
     def _emit_frame(self) -> None:
         """Queue this simulation step's record (and frame); ``step`` fills in the reward."""
         if self.record_frames or self.collect_stats:
             step = self.k.simulation.step_count
-            self.records.append(step_record(self.k, step, self.record_frames))
+            deferred = self._placement is not None
+            self.records.append(step_record(self.k, step, self.record_frames, deferred))
 
     def render(self) -> Any:
         """A top-down RGB picture of the ring (``render_mode="rgb_array"``), else ``None``."""

@@ -9,38 +9,75 @@ import numpy as np
 import numpy.typing as npt
 
 from flowrun.kernel import Kernel
+from flowrun.kernel.geometry import RingPlacement
 from flowrun.recording.frames import StepStats, VehicleFrame
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 
 
-def snapshot_frame(k: Kernel, step: int) -> VehicleFrame:
+def snapshot_frame(k: Kernel, step: int, deferred: bool = False) -> VehicleFrame:
     """Every vehicle's state at the current step, as a :class:`VehicleFrame`.
 
     The arrays are the kernel's own: it replaces them every step instead of writing into them,
-    so a frame stays valid without copies (treat it as read-only).
+    so a frame stays valid without copies (treat it as read-only). ``deferred`` leaves
+    ``edges``, ``lane_pos``, ``x``, ``y`` and ``accel_real`` empty, for :func:`complete_frames`
+    to derive for a whole batch of steps at once.
     """
     vk = k.vehicle
+    if deferred:
+        edges, lane_pos, x, y, accel_real = [], _EMPTY, _EMPTY, _EMPTY, _EMPTY
+    else:
+        edges, lane_pos, x, y, accel_real = vk.edges, vk.lane_pos, vk.x, vk.y, vk.accel_real
     return VehicleFrame(
         step=step,
         time=k.simulation.time,
         ids=vk.table.ids,
         types=vk.table.types,
-        edges=vk.edges,
+        edges=edges,
         lanes=vk.lanes,
-        lane_pos=vk.lane_pos,
+        lane_pos=lane_pos,
         position=vk.position,
         odometer=vk.odometer,
-        x=vk.x,
-        y=vk.y,
+        x=x,
+        y=y,
         speed=vk.speed,
         accel_cmd=vk.last_cmd,
-        accel_real=vk.accel_real,
+        accel_real=accel_real,
         headway=vk.headway,
         leader=vk.leader_ids(),
         is_rl=vk.table.is_rl,
     )
+
+
+_EMPTY = np.zeros(0)
+
+
+def complete_frames(records: list[StepRecord], placement: RingPlacement, dt: float) -> None:
+    """Fill in what :func:`snapshot_frame` deferred, for every framed record, in place.
+
+    The same formulas as the kernel's per-step getters, on all steps at once: edge and lane
+    position from the ring position, map coordinates from the lane shapes, and the realised
+    acceleration ``(v - v_previous) / dt``.
+    """
+    framed = [r for r in records if r.frame is not None and r.prev_speed is not None]
+    if not framed:
+        return
+    if len({r.speed.size for r in framed}) > 1:  # vehicles came or went: one step at a time
+        for r in framed:
+            complete_frames([r], placement, dt)
+        return
+    frames = [r.frame for r in framed if r.frame is not None]
+    position = np.stack([f.position for f in frames])
+    edge, lane_pos = placement.locate(position)
+    lanes = np.stack([f.lanes for f in frames])
+    x, y = placement.geometry.xy(edge, lanes, lane_pos)
+    speed = np.stack([r.speed for r in framed])
+    prev = np.stack([r.prev_speed for r in framed if r.prev_speed is not None])
+    accel = (speed - prev) / dt
+    names = placement.edge_names(edge)
+    for k, f in enumerate(frames):
+        f.edges, f.lane_pos, f.x, f.y, f.accel_real = names[k], lane_pos[k], x[k], y[k], accel[k]
 
 
 @dataclass(slots=True)
@@ -55,6 +92,7 @@ class StepRecord:
         teleports: teleports SUMO started in this step.
         frame: the full vehicle frame when recording, else ``None``.
         reward: reward of the RL step this simulation step belongs to (set by ``Env.step``).
+        prev_speed: the speeds of the step before, kept while the frame is incomplete.
     """
 
     step: int
@@ -64,14 +102,17 @@ class StepRecord:
     teleports: int
     frame: VehicleFrame | None
     reward: float = math.nan
+    prev_speed: FloatArray | None = None
 
 
-def step_record(k: Kernel, step: int, with_frame: bool) -> StepRecord:
-    """The current step's record (and frame, when asked)."""
+def step_record(k: Kernel, step: int, with_frame: bool, deferred: bool = False) -> StepRecord:
+    """The current step's record (and frame, when asked; see :func:`snapshot_frame`)."""
     sim = k.simulation
-    frame = snapshot_frame(k, step) if with_frame else None
+    vk = k.vehicle
+    frame = snapshot_frame(k, step, deferred) if with_frame else None
+    prev = vk.prev_speed if with_frame and deferred else None
     return StepRecord(
-        step, sim.time, k.vehicle.speed, sim.step_collisions, sim.step_teleports, frame
+        step, sim.time, vk.speed, sim.step_collisions, sim.step_teleports, frame, math.nan, prev
     )
 
 

@@ -10,6 +10,7 @@ numpy calls is far cheaper than one ``getPosition`` call per vehicle and step.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -80,3 +81,34 @@ class LaneGeometry:
         frac = (offset - self._local[seg]) / self._dist[seg]
         p, d = self._p[seg], self._d[seg]
         return p[..., 0] + d[..., 0] * frac, p[..., 1] + d[..., 1] * frac
+
+
+class RingPlacement:
+    """Everything a ring position determines, for whole batches of steps: edge, lane position
+    and map coordinates (the same formulas as the per-step snapshot).
+
+    Args:
+        starts: where each edge starts along the ring, m (ascending).
+        names: edge ids, in the order of ``starts``.
+        geometry: the lanes' drawn shapes.
+    """
+
+    def __init__(self, starts: FloatArray, names: Sequence[str], geometry: LaneGeometry) -> None:
+        self.starts = starts
+        self.names = np.array(names, dtype=object)
+        self.geometry = geometry
+
+    def locate(self, position: FloatArray) -> tuple[IntArray, FloatArray]:
+        """Edge index and position on the lane (m) of ring positions of any array shape."""
+        edge = np.searchsorted(self.starts, position, side="right") - 1
+        return edge, position - self.starts[edge]
+
+    def edge_names(self, edge: IntArray) -> list[Any]:
+        """Edge ids for an array of edge indices (nested lists for a 2-d array)."""
+        result: list[Any] = self.names[edge].tolist()
+        return result
+
+    def xy(self, position: FloatArray, lanes: IntArray) -> tuple[FloatArray, FloatArray]:
+        """Map coordinates (m) of ring positions on the given lanes."""
+        edge, lane_pos = self.locate(position)
+        return self.geometry.xy(edge, lanes, lane_pos)

@@ -9,19 +9,17 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from itertools import chain, repeat
 from typing import Any
 
 import numpy as np
 
 from flowrun.controllers.base import CarFollowingInputs
-from flowrun.kernel.geometry import LaneGeometry
+from flowrun.kernel.geometry import LaneGeometry, RingPlacement
 from flowrun.kernel.snapshot import RingFollowing, VehicleTable, leaders_on_ring
 from flowrun.kernel.sumo import FastCalls
 from flowrun.networks.base import NetworkSpec
-
-XYPlacer = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 _sum = np.add.reduce
 _flatten = chain.from_iterable
@@ -110,23 +108,16 @@ class VehicleKernel:
         self._reroute_wait = 0
         self._stale_edges = True
 
-    def xy_placer(self) -> XYPlacer:
-        """Map ring positions (and lanes) of any array shape to ``(x, y)``, as SUMO would place
-        cars there, for the network of this episode (closed networks; reads the lane shapes
-        from the running simulation once)."""
+    def placement(self) -> RingPlacement:
+        """Edges, lane positions and map coordinates of ring positions, for batches of steps,
+        on the network of this episode (closed networks; reads the lane shapes once)."""
         lane = self.api.lane
         edges = self.spec.edges
         geometry = LaneGeometry(
             [[lane.getShape(f"{e.id}_{i}") for i in range(e.lanes)] for e in edges],
             [[lane.getLength(f"{e.id}_{i}") for i in range(e.lanes)] for e in edges],
         )
-        starts = self._starts
-
-        def place(position: np.ndarray, lanes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            edge = np.searchsorted(starts, position, side="right") - 1
-            return geometry.xy(edge, lanes, position - starts[edge])
-
-        return place
+        return RingPlacement(self._starts, self._edge_ids, geometry)
 
     def _distance_to_route_end(self, edge_idx: np.ndarray, position: np.ndarray) -> np.ndarray:
         last = np.mod(edge_idx - 1, len(self._edge_ids))
