@@ -17,40 +17,28 @@ import sys
 import tempfile
 from pathlib import Path
 
-from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
 from flowrun.experiment.runner import Experiment
 from flowrun.recording.writer import McapRecorder
 
-SUGIYAMA = Path(__file__).resolve().parent.parent / "configs" / "sugiyama.yaml"
-SUMO_IDM = (
-    "vehicles[0].acceleration_controller={type: SimCarFollowingController}",
-    "vehicles[0].car_following.car_follow_model=IDM",
-)
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from ring import Ring, config, time_floor  # bench/ring.py, beside this file
 
 
 def main() -> None:
     mode, steps = sys.argv[1], int(sys.argv[2])
+    scale = int(sys.argv[3]) if len(sys.argv) > 3 else 1
+    ring = Ring("", scale, steps, 0)  # scale 100: 2,200 cars on 23 km, as bench/ring.py
     if mode == "raw":
-        env = make_env(load_config(SUGIYAMA, SUMO_IDM))
-        env.reset(seed=0)
-        assert env.k.process is not None
-        api = env.k.process.api
-        edges = [e.id for e in env.k.network.spec.edges]
-        for vid in env.k.vehicle.get_ids():
-            i = edges.index(api.vehicle.getRoadID(vid))
-            api.vehicle.setRoute(vid, (edges[i:] + edges[:i]) * 200)
-        for _ in range(steps):
-            api.simulationStep()
-        assert api.vehicle.getIDCount() == 22
-    else:
-        env = make_env(load_config(SUGIYAMA, [f"env.horizon={steps}"]))
-        with tempfile.TemporaryDirectory() as tmp:
+        time_floor(ring)  # SUMO's own IDM, many-lap routes, simulationStep only
+        return
+    env = make_env(config("sugiyama", ring, f"env.horizon={steps}"))
+    with tempfile.TemporaryDirectory() as tmp:
 
-            def sink(run: int) -> McapRecorder:
-                return McapRecorder(Path(tmp) / f"run_{run}.mcap", metadata={}, attachments={})
+        def sink(run: int) -> McapRecorder:
+            return McapRecorder(Path(tmp) / f"run_{run}.mcap", metadata={}, attachments={})
 
-            Experiment(env, sink_factory=sink if mode == "rec" else None).run(1, steps)
+        Experiment(env, sink_factory=sink if mode == "rec" else None).run(1, steps)
     env.close()
 
 

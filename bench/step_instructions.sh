@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Instructions per step (valgrind callgrind): raw SUMO vs flowrun baseline on the Sugiyama ring.
 # Run from the repository root: bash bench/step_instructions.sh   (needs valgrind; ~4 min)
+# The 2,200-car ring instead: SCALE=100 STEPS="60 160" MODES="raw exp" bash bench/step_instructions.sh
+# (~10 min)
 #
 # Each mode runs twice (500 and 2,500 steps); the difference / 2,000 is the cost of one step,
 # start-up cancelled out. The count is repeatable to the instruction only with: one BLAS
@@ -11,16 +13,19 @@ PY=${PY:-.venv/bin/python}
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONHASHSEED=0
 NORAND=(setarch "$(uname -m)" -R)
 "${NORAND[@]}" true 2>/dev/null || NORAND=()
+SCALE=${SCALE:-1}
+read -r SHORT LONG <<< "${STEPS:-500 2500}"
 count() {  # mode steps -> instructions of the whole process
-  "${NORAND[@]}" valgrind --tool=callgrind --callgrind-out-file=/dev/null "$PY" bench/step_instructions.py "$1" "$2" 2>&1 \
+  "${NORAND[@]}" valgrind --tool=callgrind --callgrind-out-file=/dev/null "$PY" bench/step_instructions.py "$1" "$2" "$SCALE" 2>&1 \
     | awk '/Collected/ {gsub(",", "", $4); print $4}'
 }
 "$PY" bench/step_instructions.py raw 10  # compile every module once, outside the counts
-for mode in raw exp rec; do
-  a=$(count "$mode" 500); b=$(count "$mode" 2500)
-  per=$(( (b - a) / 2000 ))
+per_raw=0 per_exp=0 per_rec=0
+for mode in ${MODES:-raw exp rec}; do
+  a=$(count "$mode" "$SHORT"); b=$(count "$mode" "$LONG")
+  per=$(( (b - a) / (LONG - SHORT) ))
   echo "$mode: $per instructions/step"
   eval "per_$mode=$per"
 done
-awk -v r="$per_raw" -v e="$per_exp" -v c="$per_rec" 'BEGIN {
+awk -v r="$per_raw" -v e="$per_exp" -v c="$per_rec" 'BEGIN { if (r > 0)
   printf "no recording / raw SUMO = %.2f, recording / raw SUMO = %.2f (instructions)\n", e / r, c / r}'
