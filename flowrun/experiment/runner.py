@@ -30,6 +30,9 @@ class FrameSink(Protocol):
 #: Steps queued before their statistics are computed (in one numpy batch) and logged: a hard
 #: kill loses at most these beyond the recorder's last flush; Ctrl-C/SIGTERM lose nothing.
 DRAIN_EVERY = 256
+#: ... or fewer on big networks: at most this many vehicle-steps are queued (memory stays
+#: small; with thousands of cars each step is a big enough batch on its own).
+DRAIN_VEHICLE_STEPS = 1 << 14
 
 SinkFactory = Callable[[int], FrameSink | None]
 Progress = Callable[[int, int], None]
@@ -91,12 +94,14 @@ class Experiment:
             try:
                 obs, _ = env.reset(seed=None if seed is None else seed + run)
                 sink = self.sink_factory(run) if self.sink_factory else None
+                vehicles = max(env.k.vehicle.num_vehicles, 1)
+                drain_at = max(1, min(DRAIN_EVERY, DRAIN_VEHICLE_STEPS // vehicles))
                 for step in range(num_steps):
                     action = rl_actions(obs) if rl_actions is not None else None
                     obs, reward, terminated, truncated, _ = env.step(action)
                     ret += reward
                     rewards.append(reward)
-                    if len(env.records) >= DRAIN_EVERY:
+                    if len(env.records) >= drain_at:
                         self._drain(sink, stats)
                     if self.progress is not None:
                         self.progress(run, step + 1)
