@@ -27,5 +27,6 @@ for mode in ${MODES:-raw exp rec}; do
   echo "$mode: $per instructions/step"
   eval "per_$mode=$per"
 done
-awk -v r="$per_raw" -v e="$per_exp" -v c="$per_rec" 'BEGIN { if (r > 0)
-  printf "no recording / raw SUMO = %.2f, recording / raw SUMO = %.2f (instructions)\n", e / r, c / r}'
+awk -v r="$per_raw" -v e="$per_exp" -v c="$per_rec" 'BEGIN { if (r > 0) {
+  if (e > 0) printf "no recording / raw SUMO = %.2f (instructions)\n", e / r
+  if (c > 0) printf "recording / raw SUMO = %.2f (instructions)\n", c / r }}'
