@@ -187,12 +187,13 @@ def test_positions_placed_on_the_lane_shapes_equal_sumos(config: Any, lanes: int
             if step % 100:
                 continue
             x, y = placement.xy(vk.position[None, :], vk.lanes[None, :])
-            edge, lane_pos = placement.locate(vk.position)
-            assert placement.edge_names(edge) == vk.edges
-            assert lane_pos.tolist() == vk.lane_pos.tolist()
+            edge, lane_pos = placement.edges.locate(vk.position)
+            names = placement.edges.edge_names(edge)
             for i, vid in enumerate(vk.get_ids()):
                 sx, sy = api.vehicle.getPosition(vid)
                 worst = max(worst, abs(x[0, i] - sx), abs(y[0, i] - sy))
+                assert names[i] == api.vehicle.getRoadID(vid)
+                assert lane_pos[i] == pytest.approx(api.vehicle.getLanePosition(vid), abs=1e-9)
         assert worst < 1e-9
     finally:
         env.close()

@@ -69,13 +69,13 @@ def complete_frames(records: list[StepRecord], placement: RingPlacement, dt: flo
         return
     frames = [r.frame for r in framed if r.frame is not None]
     position = np.stack([f.position for f in frames])
-    edge, lane_pos = placement.locate(position)
+    edge, lane_pos = placement.edges.locate(position)
     lanes = np.stack([f.lanes for f in frames])
     x, y = placement.geometry.xy(edge, lanes, lane_pos)
     speed = np.stack([r.speed for r in framed])
     prev = np.stack([r.prev_speed for r in framed if r.prev_speed is not None])
     accel = (speed - prev) / dt
-    names = placement.edge_names(edge)
+    names = placement.edges.edge_names(edge)
     for k, f in enumerate(frames):
         f.edges, f.lane_pos, f.x, f.y, f.accel_real = names[k], lane_pos[k], x[k], y[k], accel[k]
 

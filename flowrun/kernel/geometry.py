@@ -83,24 +83,25 @@ class LaneGeometry:
         return p[..., 0] + d[..., 0] * frac, p[..., 1] + d[..., 1] * frac
 
 
-class RingPlacement:
-    """Everything a ring position determines, for whole batches of steps: edge, lane position
-    and map coordinates (the same formulas as the per-step snapshot).
+class RingEdges:
+    """Which edge a ring position is on, and how far along it (any array shape).
 
     Args:
         starts: where each edge starts along the ring, m (ascending).
         names: edge ids, in the order of ``starts``.
-        geometry: the lanes' drawn shapes.
     """
 
-    def __init__(self, starts: FloatArray, names: Sequence[str], geometry: LaneGeometry) -> None:
+    def __init__(self, starts: FloatArray, names: Sequence[str]) -> None:
         self.starts = starts
         self.names = np.array(names, dtype=object)
-        self.geometry = geometry
+
+    def index(self, position: FloatArray) -> IntArray:
+        """Edge index of each ring position."""
+        return np.searchsorted(self.starts, position, side="right") - 1
 
     def locate(self, position: FloatArray) -> tuple[IntArray, FloatArray]:
-        """Edge index and position on the lane (m) of ring positions of any array shape."""
-        edge = np.searchsorted(self.starts, position, side="right") - 1
+        """Edge index and position on the lane (m) of each ring position."""
+        edge = self.index(position)
         return edge, position - self.starts[edge]
 
     def edge_names(self, edge: IntArray) -> list[Any]:
@@ -108,7 +109,21 @@ class RingPlacement:
         result: list[Any] = self.names[edge].tolist()
         return result
 
+
+class RingPlacement:
+    """Map coordinates of ring positions, for whole batches of steps: the edge and lane
+    position (:class:`RingEdges`, as the per-step snapshot derives them) on the lane shapes.
+
+    Args:
+        edges: the ring's edges.
+        geometry: the lanes' drawn shapes.
+    """
+
+    def __init__(self, edges: RingEdges, geometry: LaneGeometry) -> None:
+        self.edges = edges
+        self.geometry = geometry
+
     def xy(self, position: FloatArray, lanes: IntArray) -> tuple[FloatArray, FloatArray]:
         """Map coordinates (m) of ring positions on the given lanes."""
-        edge, lane_pos = self.locate(position)
+        edge, lane_pos = self.edges.locate(position)
         return self.geometry.xy(edge, lanes, lane_pos)

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from flowrun.controllers.base import CarFollowingInputs
-from flowrun.kernel.geometry import LaneGeometry, RingPlacement
+from flowrun.kernel.geometry import LaneGeometry, RingEdges, RingPlacement
 from flowrun.kernel.snapshot import RingFollowing, VehicleTable, leaders_on_ring
 from flowrun.kernel.sumo import FastCalls
 from flowrun.networks.base import NetworkSpec
@@ -85,8 +85,8 @@ class VehicleKernel:
         spec = self.spec
         self._edge_ids = [e.id for e in spec.edges]
         self._edge_pos = {e: i for i, e in enumerate(self._edge_ids)}
-        self._edge_names = np.array(self._edge_ids, dtype=object)
         self._starts = np.array([spec.edge_starts[e] for e in self._edge_ids])
+        self._ring_edges = RingEdges(self._starts, self._edge_ids)
         self._edge_speeds = np.array([e.speed for e in spec.edges])
         self._uniform_speed = bool(np.all(self._edge_speeds == self._edge_speeds[0]))
         start_idx = np.array(
@@ -117,7 +117,7 @@ class VehicleKernel:
             [[lane.getShape(f"{e.id}_{i}") for i in range(e.lanes)] for e in edges],
             [[lane.getLength(f"{e.id}_{i}") for i in range(e.lanes)] for e in edges],
         )
-        return RingPlacement(self._starts, self._edge_ids, geometry)
+        return RingPlacement(self._ring_edges, geometry)
 
     def _distance_to_route_end(self, edge_idx: np.ndarray, position: np.ndarray) -> np.ndarray:
         last = np.mod(edge_idx - 1, len(self._edge_ids))
@@ -148,7 +148,7 @@ class VehicleKernel:
             self.position = np.mod(unwrapped, self.spec.length)
             self._stale_edges = True
             if not self._uniform_speed:
-                self.speed_limit = self._edge_speeds[self._edge_index()]
+                self.speed_limit = self._edge_speeds[self._ring_edges.index(self.position)]
             if self._any_continuous:
                 self._check_routes()
             if self._multi_lane:
@@ -195,14 +195,10 @@ class VehicleKernel:
         self.follower = np.full(n, -1, dtype=np.int64)
         self.headway = np.full(n, np.inf)
 
-    def _edge_index(self) -> np.ndarray:
-        return np.searchsorted(self._starts, self.position, side="right") - 1
-
     def _derive_edges(self) -> None:
         if self._stale_edges:
-            idx = self._edge_index()
-            self._lane_pos = self.position - self._starts[idx]
-            self._edges_cache = self._edge_names[idx].tolist()
+            idx, self._lane_pos = self._ring_edges.locate(self.position)
+            self._edges_cache = self._ring_edges.edge_names(idx)
             self._stale_edges = False
 
     @property
