@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from itertools import groupby
 
 import numpy as np
 import numpy.typing as npt
@@ -146,28 +147,14 @@ class StatsBatch:
 def batch_stats(records: list[StepRecord]) -> StatsBatch:
     """Count, mean, min, max and population standard deviation of speed for every record.
 
-    With the same number of vehicles in every record (a ring), one numpy call per statistic
-    covers the whole batch; otherwise each step is aggregated on its own. Steps without
-    vehicles get ``nan`` statistics.
+    Consecutive records with the same number of vehicles (all of them, on a ring) are
+    aggregated together, one numpy call per statistic. Steps without vehicles get ``nan``.
     """
-    sizes = {r.speed.size for r in records}
-    aggregates: tuple[np.ndarray, ...]
-    if len(sizes) == 1 and 0 not in sizes:
-        speed = np.stack([r.speed for r in records])
-        n = speed.shape[1]
-        mean_speed = np.add.reduce(speed, axis=1) / n
-        dev = speed - mean_speed[:, None]
-        aggregates = (
-            np.full(len(records), n, dtype=np.int64),
-            mean_speed,
-            np.minimum.reduce(speed, axis=1),
-            np.maximum.reduce(speed, axis=1),
-            np.sqrt(np.add.reduce(dev * dev, axis=1) / n),
-        )
-    else:
-        table = np.array([speed_stats(r.speed) for r in records], dtype=np.float64).reshape(-1, 5)
-        aggregates = (table[:, 0].astype(np.int64), *(table[:, j] for j in range(1, 5)))
-    count, mean, low, high, std = aggregates
+    parts = [
+        _speed_aggregates(np.stack([r.speed for r in group]))
+        for _, group in groupby(records, key=lambda r: r.speed.size)
+    ]
+    count, mean, low, high, std = (np.concatenate(column) for column in zip(*parts, strict=True))
     return StatsBatch(
         np.array([r.step for r in records], dtype=np.int64),
         np.array([r.time for r in records], dtype=np.float64),
@@ -182,15 +169,18 @@ def batch_stats(records: list[StepRecord]) -> StatsBatch:
     )
 
 
-def speed_stats(speed: FloatArray) -> tuple[int, float, float, float, float]:
-    """Count, mean, min, max and population standard deviation of one step's speeds (m/s).
-
-    No vehicles: count 0 and ``nan`` elsewhere.
-    """
-    n = int(speed.size)
+def _speed_aggregates(speed: FloatArray) -> tuple[np.ndarray, ...]:
+    """Per row of ``speed`` (steps x vehicles, m/s): count, mean, min, max, std."""
+    steps, n = speed.shape
     if not n:
-        return 0, math.nan, math.nan, math.nan, math.nan
-    mean = float(np.add.reduce(speed)) / n
-    dev = speed - mean
-    low, high = float(np.minimum.reduce(speed)), float(np.maximum.reduce(speed))
-    return n, mean, low, high, math.sqrt(float(dev @ dev) / n)
+        nan = np.full(steps, math.nan)
+        return np.zeros(steps, dtype=np.int64), nan, nan, nan, nan
+    mean = np.add.reduce(speed, axis=1) / n
+    dev = speed - mean[:, None]
+    return (
+        np.full(steps, n, dtype=np.int64),
+        mean,
+        np.minimum.reduce(speed, axis=1),
+        np.maximum.reduce(speed, axis=1),
+        np.sqrt(np.add.reduce(dev * dev, axis=1) / n),
+    )

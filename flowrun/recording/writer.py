@@ -143,7 +143,7 @@ class McapRecorder:
         step = frame.step
         if step % self.record_every:
             return False
-        stamp = round(frame.time * 1e9)  # to_ns(), inline
+        stamp = to_ns(frame.time)
         seq = step & 0xFFFFFFFF
         # The kernel passes the same roster objects while the roster holds: check identity
         # first, and compare values only when an object changed.
