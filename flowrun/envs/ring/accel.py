@@ -38,17 +38,13 @@ def acceleration_box(additional_params: dict[str, Any], num_rl: int) -> Box:
     )
 
 
-class AccelEnv(Env):
-    """Fully observed ring with accelerations for the RL cars (Flow's ``AccelEnv``).
+class RingAccelBase(Env):
+    """What the fully observed ring tasks share (``AccelEnv``, ``WaveAttenuationEnv``).
 
     Observation: ``2 * num_vehicles`` values in [0, 1]: speeds / max speed, then positions /
-    network length, ordered by id (or by position with ``sort_vehicles``).
+    network length, ordered by id (or by position when ``sort_vehicles`` is set).
     Action: one acceleration per RL car in ``[-max_decel, max_accel]`` m/s^2.
-    Reward: :func:`desired_velocity` towards ``target_velocity`` (mean speed in evaluate mode).
-    Termination: collision; truncation: horizon.
     """
-
-    ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
     @property
     def action_space(self) -> Box:  # type: ignore[override]
@@ -64,13 +60,6 @@ class AccelEnv(Env):
             low=0.0, high=1.0, shape=(2 * self.initial_vehicles.num_vehicles,), dtype=np.float32
         )
 
-    def sorted_ids(self) -> list[str]:
-        """Vehicle ids in observation order."""
-        ids = self.k.vehicle.get_ids()
-        if self.env_params.additional_params.get("sort_vehicles"):
-            return sorted(ids, key=self.k.vehicle.get_x_by_id)
-        return ids
-
     def _apply_rl_actions(self, rl_actions: Any) -> None:
         rl_ids = self.k.vehicle.get_rl_ids()
         self.k.vehicle.apply_acceleration(rl_ids, rl_actions)
@@ -84,6 +73,26 @@ class AccelEnv(Env):
             speed, pos = speed[order], pos[order]
         obs = np.concatenate([speed / self.k.network.max_speed(), pos / self.k.network.length()])
         return clip_unit(obs)
+
+
+class AccelEnv(RingAccelBase):
+    """Fully observed ring with accelerations for the RL cars (Flow's ``AccelEnv``).
+
+    Observation: ``2 * num_vehicles`` values in [0, 1]: speeds / max speed, then positions /
+    network length, ordered by id (or by position with ``sort_vehicles``).
+    Action: one acceleration per RL car in ``[-max_decel, max_accel]`` m/s^2.
+    Reward: :func:`desired_velocity` towards ``target_velocity`` (mean speed in evaluate mode).
+    Termination: collision; truncation: horizon.
+    """
+
+    ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
+
+    def sorted_ids(self) -> list[str]:
+        """Vehicle ids in observation order."""
+        ids = self.k.vehicle.get_ids()
+        if self.env_params.additional_params.get("sort_vehicles"):
+            return sorted(ids, key=self.k.vehicle.get_x_by_id)
+        return ids
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired-velocity reward (mean speed when ``env_params.evaluate``)."""

@@ -11,9 +11,8 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium.spaces import Box
 
-from flowrun.envs.base import Env
 from flowrun.envs.rewards import wave_attenuation_terms
-from flowrun.envs.ring.accel import acceleration_box, clip_unit
+from flowrun.envs.ring.accel import RingAccelBase
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
 
@@ -29,7 +28,7 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
 V_OBS_SCALE = 15.0  # m/s: speeds in the partial observation are divided by this
 
 
-class WaveAttenuationEnv(Env):
+class WaveAttenuationEnv(RingAccelBase):
     """Fully observed ring with a redrawn length (Flow's ``WaveAttenuationEnv``).
 
     Observation: speeds / max speed and positions / length of all cars (``2 * N`` in [0, 1]).
@@ -68,29 +67,6 @@ class WaveAttenuationEnv(Env):
             return self.initial_network
         length = int(self.np_random.integers(bounds[0], bounds[1] + 1))
         return self.initial_network.with_params(length=length)
-
-    @property
-    def action_space(self) -> Box:  # type: ignore[override]
-        """One acceleration per RL vehicle."""
-        return acceleration_box(
-            self.env_params.additional_params, self.initial_vehicles.num_rl_vehicles
-        )
-
-    @property
-    def observation_space(self) -> Box:  # type: ignore[override]
-        """Normalised speeds and positions of all vehicles."""
-        n = self.initial_vehicles.num_vehicles
-        return Box(low=0.0, high=1.0, shape=(2 * n,), dtype=np.float32)
-
-    def _apply_rl_actions(self, rl_actions: Any) -> None:
-        self.k.vehicle.apply_acceleration(self.k.vehicle.get_rl_ids(), rl_actions)
-
-    def get_state(self) -> Any:
-        """Speeds / max speed and positions / length of all cars, by id."""
-        vk = self.k.vehicle
-        speed = vk.speed / self.k.network.max_speed()
-        pos = vk.position / self.k.network.length()
-        return clip_unit(np.concatenate([speed, pos]))
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Speed reward minus acceleration penalty (mean speed when evaluating)."""
