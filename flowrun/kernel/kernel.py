@@ -14,7 +14,8 @@ from flowrun.kernel.snapshot import VehicleTable
 from flowrun.kernel.sumo import SumoFiles, SumoProcess
 from flowrun.kernel.vehicle import VehicleKernel
 from flowrun.networks.base import Network
-from flowrun.networks.build import build_network, route_name, routes_xml
+from flowrun.networks.build import build_network
+from flowrun.networks.routes import route_name, routes_xml
 
 log = logging.getLogger(__name__)
 

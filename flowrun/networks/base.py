@@ -29,6 +29,7 @@ class Node:
     x: float
     y: float
     type: str = "priority"
+    radius: float | None = None
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,7 @@ class Edge:
         lanes: number of lanes.
         speed: speed limit, m/s.
         shape: polyline (x, y) points, metres.
+        priority: SUMO edge priority (decides right of way at priority junctions).
     """
 
     id: str
@@ -52,6 +54,21 @@ class Edge:
     lanes: int
     speed: float
     shape: tuple[tuple[float, float], ...] = ()
+    priority: int = 78
+
+
+@dataclass(frozen=True)
+class Connection:
+    """A lane-to-lane connection through a junction (Flow's ``specify_connections`` entries)."""
+
+    from_edge: str
+    to_edge: str
+    from_lane: int
+    to_lane: int
+
+
+#: One route choice: the edges driven and the probability of taking it.
+RouteChoice = tuple[tuple[str, ...], float]
 
 
 @dataclass(frozen=True)
@@ -61,10 +78,24 @@ class NetworkSpec:
     Attributes:
         nodes: junctions.
         edges: roads, in driving order for closed networks.
-        routes: route id -> edge ids; vehicles starting on edge ``e`` use route ``e``.
+        routes: start edge -> the edges of its (most likely) route; vehicles starting on edge
+            ``e`` use route ``e``.
         edge_starts: edge id -> position of the edge's start along the network, metres.
+            Junction-internal edges (ids starting with ``:``) may be listed; the kernel places
+            the ones that are not right after the edge that leads into them.
         length: total length of the network along its edges, metres.
         closed: ``True`` for a ring (positions wrap at ``length``).
+        extra: network-specific facts (e.g. the ring's radius).
+        connections: lane-to-lane connections; empty lets netconvert decide.
+        route_choices: start edge -> ``((edges, probability), ...)`` when a start edge has
+            several routes (Flow's ``[(route, prob)]`` form); empty otherwise.
+        internal_links: build junction-internal lanes (all networks but the ring, whose
+            positions must add up exactly around the loop).
+        main_route: the edges of the network's main road, in driving order (time-space
+            diagrams follow it); empty means the edges in their listed order.
+        net_file: an existing ``.net.xml`` to use as is (``NetParams(template=...)``) instead
+            of building one from nodes and edges.
+        extra_files: further SUMO input files of a template (routes, vehicle types).
     """
 
     nodes: tuple[Node, ...]
@@ -74,6 +105,20 @@ class NetworkSpec:
     length: float
     closed: bool = False
     extra: dict[str, Any] = field(default_factory=dict)
+    connections: tuple[Connection, ...] = ()
+    route_choices: dict[str, tuple[RouteChoice, ...]] = field(default_factory=dict)
+    internal_links: bool = False
+    main_route: tuple[str, ...] = ()
+    net_file: str | None = None
+    extra_files: tuple[str, ...] = ()
+
+    def choices(self, start_edge: str) -> tuple[RouteChoice, ...]:
+        """The route choices of vehicles starting on ``start_edge`` (one sure route if fixed)."""
+        if start_edge in self.route_choices:
+            return self.route_choices[start_edge]
+        if start_edge in self.routes:
+            return ((self.routes[start_edge], 1.0),)
+        return ()
 
 
 @dataclass(frozen=True)
