@@ -16,6 +16,7 @@ from collections.abc import Mapping
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from flowrun.config.checks import FIELD_CHECKS, NETWORK_NUMBERS
+from flowrun.config.inflows import CAMEL_CASE
 from flowrun.config.model import NetworkConfig
 from flowrun.config.params import (
     ControllerSpec,
@@ -26,6 +27,7 @@ from flowrun.config.params import (
     VehicleType,
 )
 from flowrun.config.yamlio import KeyPath, Locations
+from flowrun.errors import ConfigError
 from flowrun.suggest import did_you_mean
 
 # ``network:`` keys that are not the network type's ``additional_params``.
@@ -192,8 +194,36 @@ class Converter:
     def inflows(self, data: Any, path: KeyPath) -> InFlows:
         """A list of inflows -> :class:`InFlows`."""
         if not isinstance(data, list):
-            raise self.loc.error(f"expected a list of inflows, got {show(data)}", path)
-        return InFlows([self.section(InFlow, item, (*path, i)) for i, item in enumerate(data)])
+            raise self.loc.error(
+                f"expected a list of inflows (- edge: ..., veh_type: ..., vehs_per_hour: ...), "
+                f"got {show(data)}",
+                path,
+            )
+        flows = []
+        for i, item in enumerate(data):
+            at = (*path, i)
+            if isinstance(item, Mapping):
+                for key in item:
+                    if key in CAMEL_CASE:
+                        raise self.loc.error(
+                            f"'{key}' is Flow's old spelling; write '{CAMEL_CASE[key]}'",
+                            (*at, key),
+                        )
+            try:
+                flows.append(self.section(InFlow, item, at))
+            except ConfigError as err:
+                if err.location:  # located already (a key, type or value check)
+                    if "unknown key" in err.message:
+                        raise ConfigError(
+                            err.message + "; other SUMO <flow> attributes go under 'extra'",
+                            err.path,
+                            err.location,
+                        ) from None
+                    raise
+                # InFlow's own cross-field check (rates, begin/end): at the field it names
+                field_at = (*at, err.path) if err.path else at
+                raise self.loc.error(err.message, field_at) from None
+        return InFlows(flows)
 
     def network(self, data: Any, path: KeyPath) -> NetworkConfig:
         """``{type: ring, length: 230, ...}`` -> ``NetworkConfig("ring", NetParams({...}))``."""

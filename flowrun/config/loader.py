@@ -95,8 +95,8 @@ def _build(data: dict[str, Any], loc: Locations) -> ExperimentConfig:
     cfg: ExperimentConfig = Converter(loc).section(ExperimentConfig, data, ())
     _check_group_ids(cfg, data, loc)
     _check_controllers(cfg, data, loc)
-    _check_inflows(cfg, loc)
     _check_network(cfg, loc)
+    _check_inflows(cfg, loc)
     return cfg
 
 
@@ -201,6 +201,27 @@ def _check_inflows(cfg: ExperimentConfig, loc: Locations) -> None:
                 f"inflows use the id of a group under vehicles: {', '.join(types) or '(none)'}",
                 ("network", "inflows", j, "veh_type"),
             )
+    edges = _network_edges(cfg)
+    for j, flow in enumerate(inflows.get()):
+        if edges is not None and flow.edge not in edges:
+            raise loc.error(
+                f"no edge '{flow.edge}' in the {cfg.network.type} network"
+                f"{did_you_mean(flow.edge, edges)}; its edges are: {', '.join(edges)}",
+                ("network", "inflows", j, "edge"),
+            )
+
+
+def _network_edges(cfg: ExperimentConfig) -> list[str] | None:
+    """The edge ids of the config's network (``None`` when it cannot be built yet)."""
+    find = _optional("flowrun.networks.registry", "network_class")
+    if find is None:
+        return None
+    try:
+        cls = find(cfg.network.type)
+        network = cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial)
+    except ConfigError:
+        return None  # reported by _check_network, with its own path
+    return [edge.id for edge in network.spec.edges]
 
 
 def _check_network(cfg: ExperimentConfig, loc: Locations) -> None:

@@ -11,6 +11,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from flowrun.config.inflows import InFlow as InFlow
+from flowrun.config.inflows import InFlows as InFlows
+
 # Flow's speed modes (SUMO speedMode bit sets) and lane-change modes (laneChangeMode bit sets).
 SPEED_MODES: dict[str, int] = {
     "aggressive": 0,
@@ -318,40 +321,6 @@ class VehicleParams:
 def is_rl(group: VehicleType) -> bool:
     """Whether a group is driven by the RL agent."""
     return group.acceleration_controller.type in ("RLController", "RL")
-
-
-@dataclass(frozen=True)
-class InFlow:
-    """One inflow (Flow's ``InFlows.add`` arguments)."""
-
-    edge: str
-    veh_type: str
-    vehs_per_hour: float | None = None
-    probability: float | None = None
-    period: float | None = None
-    depart_lane: str = "first"
-    depart_speed: str | float = 0.0
-    begin: float = 1.0
-    end: float = 86400.0
-    name: str = "flow"
-
-
-class InFlows:
-    """Inflows of vehicles into an open network (Flow's ``InFlows``)."""
-
-    def __init__(self, flows: list[InFlow] | None = None) -> None:
-        self.flows: list[InFlow] = list(flows or [])
-
-    def add(self, edge: str, veh_type: str, **kwargs: Any) -> None:
-        """Add an inflow on ``edge`` of vehicles of group ``veh_type``."""
-        self.flows.append(InFlow(edge=edge, veh_type=veh_type, **kwargs))
-
-    def get(self) -> list[InFlow]:
-        """All inflows."""
-        return list(self.flows)
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, InFlows) and self.flows == other.flows
 
 
 class TrafficLightParams:
