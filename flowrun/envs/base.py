@@ -152,21 +152,29 @@ class Env(gymnasium.Env):
         self.network = self.episode_network()
         self.scenario = self.network
         start = self.network.start_positions(self.np_random)
-        table = build_table(self.network.vehicles, self.controls, start)
+        table = build_table(
+            self.network.vehicles, self.controls, start, self.network.spec, self.np_random
+        )
         sumo_seed = int(self.np_random.integers(2**31 - 1))
         self._ctrl_rng = np.random.default_rng(int(self.np_random.integers(2**63 - 1)))
+        route_rng = np.random.default_rng(int(self.np_random.integers(2**63 - 1)))
         self.k.sim_params = replace(self.sim_params, seed=sumo_seed)
         # Recording on a ring: edges, lane positions, x/y (from the lane shapes, not a getter
         # per car and step) and realised accelerations of the logged frames are derived for
         # a whole batch of steps at once (take_records).
         closed = self.network.spec.closed
         self.k.reset(
-            self.network, table, read_xy=self.read_xy or (self.record_frames and not closed)
+            self.network,
+            table,
+            read_xy=self.read_xy or (self.record_frames and not closed),
+            rng=route_rng,
         )
         deferred = self.record_frames and closed and not self.read_xy
         self._placement = self.k.vehicle.placement() if deferred else None
         for control in self.controls:
-            control.controller.reset(control.index.size)
+            control.version = -1
+            control.index = np.zeros(0, dtype=np.int64)
+            control.controller.reset(0)
         self.step_counter = 0
         self.time_counter = 0
         self.records = []
@@ -217,9 +225,12 @@ class Env(gymnasium.Env):
         self.time_counter += 1
         t = self.k.simulation.time
         vk = self.k.vehicle
-        for control in self.controls:
+        for gi, control in enumerate(self.controls):
             c = control.controller
-            if c.is_rl or not c.commands_sumo or control.index.size == 0:
+            if c.is_rl or not c.commands_sumo:
+                continue
+            control.follow(vk.table, gi)
+            if control.index.size == 0:
                 continue
             accel = c.get_accel(vk.inputs(control.sl, t), self._ctrl_rng)
             vk.apply_acceleration_idx(control.sl, accel)

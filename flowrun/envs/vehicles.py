@@ -11,24 +11,46 @@ from flowrun.config.params import LANE_CHANGE_MODES, SPEED_MODES, VehicleParams
 from flowrun.controllers.base import AccelerationController
 from flowrun.controllers.registry import build_controller, resolve_controller
 from flowrun.errors import ConfigError
-from flowrun.kernel.snapshot import VehicleTable
-from flowrun.networks.base import StartPositions
+from flowrun.kernel.population import Population, VehicleClass, VehicleTable
+from flowrun.networks.base import NetworkSpec, StartPositions
+from flowrun.networks.routes import route_name
 from flowrun.suggest import unknown_name
 
 
 @dataclass
 class GroupControl:
-    """The acceleration controller of one vehicle group and the vehicle indices it drives."""
+    """The acceleration controller of one vehicle group and the vehicle rows it drives."""
 
     name: str
     index: np.ndarray
     controller: AccelerationController
-    #: the same vehicles as a slice (groups are contiguous in placement order): a view, no copy
-    sl: slice = field(init=False)
+    #: the same rows as a slice when they are contiguous (a view, no copy), else ``index``
+    sl: slice | np.ndarray = field(init=False)
+    #: the population version ``index`` was taken from
+    version: int = -1
 
     def __post_init__(self) -> None:
-        start = int(self.index[0]) if self.index.size else 0
-        self.sl = slice(start, start + int(self.index.size))
+        self._set_slice()
+
+    def _set_slice(self) -> None:
+        idx = self.index
+        start = int(idx[0]) if idx.size else 0
+        contiguous = idx.size == 0 or int(idx[-1]) - start + 1 == idx.size
+        self.sl = slice(start, start + int(idx.size)) if contiguous else idx
+
+    def follow(self, population: Population, group: int) -> None:
+        """Take the group's rows from the population when vehicles came or went.
+
+        A controller with per-vehicle memory starts afresh when its group's size changes.
+        """
+        if population.version == self.version:
+            return
+        self.version = population.version
+        old = self.index.size
+        self.index = population.rows_of_group(group)
+        self._set_slice()
+        if self.index.size != old:
+            self.controller.reset(self.index.size)
 
 
 def mode_value(mode: str | int, table: dict[str, int], what: str) -> int:
@@ -61,43 +83,61 @@ def _routed_continuously(route_type: str | None) -> bool:
 
 
 def build_table(
-    vehicles: VehicleParams, controls: list[GroupControl], start: StartPositions
+    vehicles: VehicleParams,
+    controls: list[GroupControl],
+    start: StartPositions,
+    spec: NetworkSpec,
+    rng: np.random.Generator,
 ) -> VehicleTable:
-    """The kernel's static vehicle table for one episode."""
-    ids, types, group, is_rl, commanded, continuous = [], [], [], [], [], []
-    lengths, max_speeds, initial, speed_modes, lc_modes = [], [], [], [], []
+    """The vehicles at the start of an episode and every group's static facts.
+
+    A vehicle starting on an edge with several route choices gets one drawn from ``rng``.
+    """
+    classes = []
+    ids: list[str] = []
+    group: list[int] = []
+    initial: list[float] = []
     for gi, (g, ctl) in enumerate(zip(vehicles.groups, controls, strict=True)):
         c = ctl.controller
+        cf = g.car_following_params
         routed = _routed_continuously(g.routing_controller.type if g.routing_controller else None)
-        speed_mode = mode_value(g.car_following_params.speed_mode, SPEED_MODES, "speed_mode")
-        lc_mode = mode_value(
-            g.lane_change_params.lane_change_mode, LANE_CHANGE_MODES, "lane_change_mode"
+        classes.append(
+            VehicleClass(
+                name=g.veh_id,
+                is_rl=bool(c.is_rl),
+                commanded=bool(c.commands_sumo and not c.is_rl),
+                continuous=routed,
+                length=float(cf.length),
+                min_gap=float(cf.min_gap),
+                max_speed=float(cf.max_speed),
+                accel=float(cf.accel),
+                decel=float(cf.decel),
+                speed_mode=mode_value(cf.speed_mode, SPEED_MODES, "speed_mode"),
+                lane_change_mode=mode_value(
+                    g.lane_change_params.lane_change_mode, LANE_CHANGE_MODES, "lane_change_mode"
+                ),
+            )
         )
         for i in range(g.num_vehicles):
             ids.append(f"{g.veh_id}_{i}")
-            types.append(g.veh_id)
             group.append(gi)
-            is_rl.append(bool(c.is_rl))
-            commanded.append(bool(c.commands_sumo and not c.is_rl))
-            continuous.append(routed)
-            lengths.append(g.car_following_params.length)
-            max_speeds.append(g.car_following_params.max_speed)
             initial.append(float(g.initial_speed))
-            speed_modes.append(speed_mode)
-            lc_modes.append(lc_mode)
     return VehicleTable(
+        classes=tuple(classes),
         ids=ids,
-        types=types,
         group=np.array(group, dtype=np.int64),
-        is_rl=np.array(is_rl, dtype=bool),
-        commanded=np.array(commanded, dtype=bool),
-        continuous=np.array(continuous, dtype=bool),
-        lengths=np.array(lengths, dtype=np.float64),
-        max_speeds=np.array(max_speeds, dtype=np.float64),
         start_edges=start.edges,
         start_lane_pos=start.lane_pos,
         start_lanes=start.lanes,
         initial_speeds=initial,
-        speed_modes=speed_modes,
-        lane_change_modes=lc_modes,
+        routes=[_draw_route(spec, e, rng) for e in start.edges],
     )
+
+
+def _draw_route(spec: NetworkSpec, edge: str, rng: np.random.Generator) -> str | None:
+    """SUMO route id for a vehicle starting on ``edge`` (a seeded draw among choices)."""
+    choices = spec.choices(edge)
+    if len(choices) <= 1:
+        return None
+    probs = np.array([p for _, p in choices], dtype=np.float64)
+    return route_name(edge, int(rng.choice(len(choices), p=probs / probs.sum())))

@@ -6,11 +6,14 @@ import logging
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from flowrun.config.params import SumoParams
 from flowrun.errors import SimulationError
+from flowrun.kernel.lanes import LaneTable
 from flowrun.kernel.network import NetworkKernel
+from flowrun.kernel.population import VehicleTable
 from flowrun.kernel.simulation import SimulationKernel
-from flowrun.kernel.snapshot import VehicleTable
 from flowrun.kernel.sumo import SumoFiles, SumoProcess
 from flowrun.kernel.vehicle import VehicleKernel
 from flowrun.networks.base import Network
@@ -44,7 +47,13 @@ class Kernel:
         """Whether a simulation is running."""
         return self.process is not None and self.process.api is not None
 
-    def reset(self, network: Network, table: VehicleTable, read_xy: bool = True) -> None:
+    def reset(
+        self,
+        network: Network,
+        table: VehicleTable,
+        read_xy: bool = True,
+        rng: np.random.Generator | None = None,
+    ) -> None:
         """(Re)start SUMO on ``network`` with the vehicles of ``table`` at their start positions.
 
         Restarting libsumo costs a few milliseconds and reproduces a fresh start exactly.
@@ -56,7 +65,7 @@ class Kernel:
         spec = network.spec
         self.net_file = build_network(spec, self.work_dir, name=network.network_type or "network")
         routes = self.work_dir / f"{self.net_file.stem.removesuffix('.net')}.rou.xml"
-        routes.write_text(routes_xml(spec, network.vehicles))
+        routes.write_text(routes_xml(spec, network.vehicles, network.net_params.inflows))
         self.process = SumoProcess(SumoFiles(self.net_file, routes), self.sim_params, self.gui)
         api = self.process.start()
         try:
@@ -64,10 +73,11 @@ class Kernel:
         except Exception:
             self.close()
             raise
-        self.network = NetworkKernel(spec)
-        self.vehicle = VehicleKernel(table, spec, self.sim_params.sim_step)
+        lanes = None if spec.closed else LaneTable.read(api, spec)
+        self.network = NetworkKernel(spec, lanes)
+        self.vehicle = VehicleKernel(table, spec, self.sim_params.sim_step, rng)
         self.vehicle.read_xy = read_xy
-        self.vehicle.attach(api)
+        self.vehicle.attach(api, lanes)
         self.simulation.attach(api)
         self.vehicle.update(first=True)
 
@@ -76,15 +86,15 @@ class Kernel:
         for i, vid in enumerate(table.ids):
             v.add(
                 vid,
-                routeID=route_name(table.start_edges[i]),
-                typeID=table.types[i],
+                routeID=table.routes[i] or route_name(table.start_edges[i]),
+                typeID=table.classes[int(table.group[i])].name,
                 depart="now",
                 departLane=str(table.start_lanes[i]),
                 departPos=repr(table.start_lane_pos[i]),
                 departSpeed=repr(table.initial_speeds[i]),
             )
         api.simulationStep()
-        missing = sorted(set(table.ids) - set(v.getIDList()))
+        missing = sorted(set(table.ids) - set(v.getIDList())) if table.size else []
         if missing:
             raise SimulationError(
                 f"SUMO could not insert {len(missing)} of {table.size} vehicles "
@@ -92,8 +102,9 @@ class Kernel:
                 "types' minGap; use fewer vehicles, a longer network or less bunching"
             )
         for i, vid in enumerate(table.ids):
-            v.setSpeedMode(vid, table.speed_modes[i])
-            v.setLaneChangeMode(vid, table.lane_change_modes[i])
+            c = table.classes[int(table.group[i])]
+            v.setSpeedMode(vid, c.speed_mode)
+            v.setLaneChangeMode(vid, c.lane_change_mode)
 
     def step(self) -> None:
         """Send buffered commands, advance one step, read the new state."""

@@ -4,25 +4,45 @@ from __future__ import annotations
 
 import bisect
 
+from flowrun.kernel.lanes import LaneTable
 from flowrun.networks.base import NetworkSpec
 
 
 class NetworkKernel:
-    """Read-only facts about the network of the current episode."""
+    """Read-only facts about the network of the current episode.
 
-    def __init__(self, spec: NetworkSpec) -> None:
+    Args:
+        spec: the network description.
+        lanes: the lanes SUMO built (open networks): adds junction-internal edges to the
+            edge starts and lengths.
+    """
+
+    def __init__(self, spec: NetworkSpec, lanes: LaneTable | None = None) -> None:
         self.spec = spec
+        self.lanes = lanes
         self._edges = {e.id: e for e in spec.edges}
-        self._starts = sorted((s, e) for e, s in spec.edge_starts.items())
-        self._max_speed = max(e.speed for e in spec.edges)
+        self._edge_starts = dict(spec.edge_starts if lanes is None else lanes.edge_starts)
+        self._starts = sorted(
+            (s, e) for e, s in self._edge_starts.items() if not e.startswith(":")
+        )
+        self._max_speed = max((e.speed for e in spec.edges), default=0.0)
 
     def length(self) -> float:
         """Total length of the network along its edges, m."""
         return self.spec.length
 
     def edge_length(self, edge_id: str) -> float:
-        """Length of one edge, m."""
-        return self._edges[edge_id].length
+        """Length of one edge, m (internal edges included; -1001 for an unknown edge)."""
+        if edge_id in self._edges:
+            return self._edges[edge_id].length
+        lanes = self.lanes
+        if lanes is not None and edge_id in lanes.edge_pos:
+            return float(lanes.length[lanes.edge_index == lanes.edge_pos[edge_id]].max())
+        return -1001.0
+
+    def non_internal_length(self) -> float:
+        """Total length of the non-internal edges, m."""
+        return float(sum(e.length for e in self.spec.edges))
 
     def get_edge_list(self) -> list[str]:
         """All edge ids."""
@@ -42,7 +62,7 @@ class NetworkKernel:
 
     def get_x(self, edge: str, position: float) -> float:
         """Position along the network of ``position`` metres into ``edge``."""
-        return self.spec.edge_starts[edge] + position
+        return self._edge_starts[edge] + position
 
     def get_edge(self, x: float) -> tuple[str, float]:
         """Edge and position on it of network position ``x`` (wrapped on closed networks)."""
@@ -61,4 +81,4 @@ class NetworkKernel:
     @property
     def total_edgestarts_dict(self) -> dict[str, float]:
         """Start position of every edge (Flow's name)."""
-        return dict(self.spec.edge_starts)
+        return dict(self._edge_starts)

@@ -1,8 +1,6 @@
-"""The vehicle population of an episode, and the pure geometry of who follows whom."""
+"""The pure geometry of who follows whom: on a ring, and within the lanes of any network."""
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -10,48 +8,6 @@ import numpy.typing as npt
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
-
-
-@dataclass(frozen=True)
-class VehicleTable:
-    """Static facts about every vehicle of an episode, in placement order.
-
-    Attributes:
-        ids: vehicle ids (``{group}_{i}``).
-        types: group name of each vehicle.
-        group: index of each vehicle's group in ``VehicleParams.groups``.
-        is_rl: driven by the RL agent.
-        commanded: a flowrun (non-SUMO, non-RL) controller sets its acceleration.
-        continuous: routed by ``ContinuousRouter``.
-        lengths: vehicle length, m.
-        max_speeds: vehicle-type maximum speed, m/s.
-        start_edges: edge each vehicle enters on.
-        start_lane_pos: entry position on that edge, m.
-        start_lanes: entry lane.
-        initial_speeds: entry speed, m/s.
-        speed_modes: SUMO speedMode of each vehicle.
-        lane_change_modes: SUMO laneChangeMode of each vehicle.
-    """
-
-    ids: list[str]
-    types: list[str]
-    group: IntArray
-    is_rl: BoolArray
-    commanded: BoolArray
-    continuous: BoolArray
-    lengths: FloatArray
-    max_speeds: FloatArray
-    start_edges: list[str]
-    start_lane_pos: list[float]
-    start_lanes: list[int]
-    initial_speeds: list[float]
-    speed_modes: list[int]
-    lane_change_modes: list[int]
-
-    @property
-    def size(self) -> int:
-        """Number of vehicles."""
-        return len(self.ids)
 
 
 def leaders_on_ring(
@@ -139,3 +95,41 @@ class RingFollowing:
             lead_length = self.lengths[leader]
             self._order = (leader, follower, wrap - lead_length, -lead_length)
         return leader, follower, headway
+
+
+def leaders_by_lane(
+    lane_key: IntArray, lane_pos: FloatArray, lengths: FloatArray
+) -> tuple[IntArray, IntArray, FloatArray, IntArray, IntArray]:
+    """Leader, follower and headway of every car among the cars of its own lane.
+
+    Cars are sorted by position within each lane (one ``lexsort``); each car's leader is the
+    next one ahead on the lane. The frontmost car of a lane gets no leader here and the
+    rearmost no follower: those are found beyond the lane's ends (along the route, through
+    junctions) by the caller.
+
+    Args:
+        lane_key: integer id of each car's lane.
+        lane_pos: front-bumper position of each car on its lane, m.
+        lengths: car lengths, m.
+
+    Returns:
+        leader index, follower index (-1 for none), headway (m, ``inf`` without leader),
+        the indices of the frontmost car of every occupied lane and of the rearmost.
+    """
+    n = lane_key.shape[0]
+    leader = np.full(n, -1, dtype=np.int64)
+    follower = np.full(n, -1, dtype=np.int64)
+    headway = np.full(n, np.inf)
+    if n == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return leader, follower, headway, empty, empty
+    order = np.lexsort((lane_pos, lane_key))
+    key = lane_key[order]
+    same = key[1:] == key[:-1]
+    ego, ahead = order[:-1][same], order[1:][same]
+    leader[ego] = ahead
+    follower[ahead] = ego
+    headway[ego] = lane_pos[ahead] - lengths[ahead] - lane_pos[ego]
+    fronts = order[np.concatenate((~same, [True]))]
+    rears = order[np.concatenate(([True], ~same))]
+    return leader, follower, headway, fronts, rears

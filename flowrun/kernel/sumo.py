@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import logging
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -102,6 +102,11 @@ class FastCalls:
     sim_time: Callable[[], float]
     colliding_number: Callable[[], int]
     teleport_number: Callable[[], int]
+    get_lane_id: Callable[[str], str]
+    get_lane_position: Callable[[str], float]
+    departed_ids: Callable[[], Sequence[str]]
+    arrived_ids: Callable[[], Sequence[str]]
+    id_count: Callable[[], int]
 
     @staticmethod
     def of(api: Any) -> FastCalls:
@@ -117,6 +122,11 @@ class FastCalls:
                 raw.simulation_getTime,
                 raw.simulation_getCollidingVehiclesNumber,
                 raw.simulation_getStartingTeleportNumber,
+                raw.vehicle_getLaneID,
+                raw.vehicle_getLanePosition,
+                raw.simulation_getDepartedIDList,
+                raw.simulation_getArrivedIDList,
+                raw.vehicle_getIDCount,
             )
         v, sim = api.vehicle, api.simulation
         return FastCalls(
@@ -128,6 +138,11 @@ class FastCalls:
             sim.getTime,
             sim.getCollidingVehiclesNumber,
             sim.getStartingTeleportNumber,
+            v.getLaneID,
+            v.getLanePosition,
+            sim.getDepartedIDList,
+            sim.getArrivedIDList,
+            v.getIDCount,
         )
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from itertools import chain, repeat
 from typing import Any
 
@@ -17,8 +17,12 @@ import numpy as np
 
 from flowrun.controllers.base import CarFollowingInputs
 from flowrun.kernel.geometry import LaneGeometry, RingEdges, RingPlacement
-from flowrun.kernel.snapshot import RingFollowing, VehicleTable, leaders_on_ring
+from flowrun.kernel.lanes import LaneTable
+from flowrun.kernel.open_road import Following
+from flowrun.kernel.population import Population, VehicleTable
+from flowrun.kernel.snapshot import RingFollowing, leaders_on_ring
 from flowrun.kernel.sumo import FastCalls
+from flowrun.kernel.vehicle_api import FlowVehicleGetters
 from flowrun.networks.base import NetworkSpec
 
 _sum = np.add.reduce
@@ -29,23 +33,39 @@ _consume = deque[object](maxlen=0).extend  # runs an iterator to its end, keepin
 SLOW_DOWN_DURATION = 1e-3
 
 
-class VehicleKernel:
+class VehicleKernel(FlowVehicleGetters):
     """Flow's ``k.vehicle``: per-step vehicle state and commands.
 
+    Per-vehicle state is held in compact arrays, one row per vehicle in the network now
+    (``table`` is the :class:`Population`: ids, groups, lengths, ... of the same rows). On a
+    closed ring with no departures the rows never change and leaders come from one sort
+    around the loop; on any other network the population follows SUMO's departed / arrived
+    lists and leaders are found per lane and across junctions (:mod:`open_road`).
+
     Args:
-        table: the fixed vehicle population of the episode (ids, groups, lengths, ...).
+        initial: the vehicles placed at the start of the episode and every group's facts.
         spec: the network the vehicles drive on.
         dt: simulation step, s.
+        rng: the generator route choices are drawn from (``ContinuousRouter``).
     """
 
-    def __init__(self, table: VehicleTable, spec: NetworkSpec, dt: float) -> None:
-        self.table = table
+    def __init__(
+        self,
+        initial: VehicleTable,
+        spec: NetworkSpec,
+        dt: float,
+        rng: np.random.Generator | None = None,
+    ) -> None:
+        self.initial = initial
+        self.table = Population(initial.classes)
+        self.table.add(initial.ids, initial.group.tolist())
         self.spec = spec
         self.dt = dt
+        self.rng = rng if rng is not None else np.random.default_rng(0)
         self.api: Any = None
         self.read_xy = True
-        n = table.size
-        self._index = {vid: i for i, vid in enumerate(table.ids)}
+        self.ring_path = spec.closed
+        n = initial.size
         self._all = slice(0, n)
         self._edges_cache: list[str] | None = [""] * n
         self._lane_pos = np.zeros(n)
@@ -76,12 +96,26 @@ class VehicleKernel:
         self._routes: dict[int, list[str]] = {}
         self._edge_by_id = {e.id: e for e in spec.edges}
         self._multi_lane = any(e.lanes > 1 for e in spec.edges)
+        self.tailway = np.full(n, np.inf)
+        self.on_internal = np.zeros(n, dtype=bool)
+        self._lane_key = np.zeros(n, dtype=np.int64)
+        self._lanes: LaneTable | None = None
+        self._following_open: Following | None = None
+        self._version = self.table.version
+        self._route_end = np.full(n, -1, dtype=np.int64)
+        self._pending_removal: list[str] = []
+        self.departed_ids: list[str] = []
+        self.arrived_ids: list[str] = []
+        self._flow_counts: deque[tuple[int, int]] = deque(maxlen=100_000)
 
     # ------------------------------------------------------------------ reading
-    def attach(self, api: Any) -> None:
+    def attach(self, api: Any, lanes: LaneTable | None = None) -> None:
         """Bind to a freshly started simulation (``libsumo`` or ``traci`` module)."""
         self.api = api
         self._fast = FastCalls.of(api)
+        if not self.ring_path:
+            self._attach_open(api, lanes or LaneTable.read(api, self.spec))
+            return
         spec = self.spec
         self._edge_ids = [e.id for e in spec.edges]
         self._edge_pos = {e: i for i, e in enumerate(self._edge_ids)}
@@ -90,9 +124,9 @@ class VehicleKernel:
         self._edge_speeds = np.array([e.speed for e in spec.edges])
         self._uniform_speed = bool(np.all(self._edge_speeds == self._edge_speeds[0]))
         start_idx = np.array(
-            [self._edge_pos.get(e, 0) for e in self.table.start_edges], dtype=np.int64
+            [self._edge_pos.get(e, 0) for e in self.initial.start_edges], dtype=np.int64
         )
-        self._start_position = self._starts[start_idx] + np.array(self.table.start_lane_pos)
+        self._start_position = self._starts[start_idx] + np.array(self.initial.start_lane_pos)
         self._following = RingFollowing(self.table.lengths, spec.length)
         self._any_continuous = bool(self.table.continuous.any())
         self.speed_limit = np.full(self.table.size, self._edge_speeds[0])
@@ -142,7 +176,7 @@ class VehicleKernel:
             # flattened first: numpy would otherwise inspect every (x, y) tuple's shape
             xy = np.array(list(_flatten(map(fast.get_position, ids))), dtype=np.float64)
             self.x, self.y = xy[0::2], xy[1::2]
-        if self.spec.closed:
+        if self.ring_path:
             self.odometer = np.fromiter(map(fast.get_distance, ids), np.float64, n)
             unwrapped = self._start_position + self.odometer
             self.position = np.mod(unwrapped, self.spec.length)
@@ -158,11 +192,19 @@ class VehicleKernel:
             else:
                 self.leader, self.follower, self.headway = self._following.compute(unwrapped)
         else:
-            self._update_open(self.api.vehicle, ids)
+            speed = self._update_open(first)
         if first:
             self.prev_speed = speed
         self.speed = speed
-        if not self._multi_lane and self._following.complete:
+        if not self.ring_path:
+            has_lead = self.leader >= 0
+            self.leader_speed = np.where(has_lead, speed[np.where(has_lead, self.leader, 0)], speed)
+            has_fol = self.follower >= 0
+            self.follower_speed = np.where(
+                has_fol, speed[np.where(has_fol, self.follower, 0)], speed
+            )
+            self.follower_headway = self.tailway
+        elif not self._multi_lane and self._following.complete:
             self.leader_speed = speed[self.leader]
             self.follower_speed = speed[self.follower]
             self.follower_headway = self.headway[self.follower]
@@ -179,24 +221,41 @@ class VehicleKernel:
             self._accel_real = (self.speed - self.prev_speed) / self.dt
         return self._accel_real
 
-    def _update_open(self, v: Any, ids: list[str]) -> None:
-        """Generic path for open networks: edge and lane position straight from SUMO."""
-        edges = list(map(v.getRoadID, ids))
-        self._lane_pos = np.array(list(map(v.getLanePosition, ids)), dtype=np.float64)
-        self.odometer = np.array(list(map(v.getDistance, ids)), dtype=np.float64)
-        starts = self.spec.edge_starts
-        self.position = np.array([starts.get(e, math.nan) for e in edges]) + self._lane_pos
-        self._edges_cache = edges
-        self._stale_edges = False
-        by_id = self._edge_by_id
-        self.speed_limit = np.array([by_id[e].speed if e in by_id else math.inf for e in edges])
+    def _update_open(self, first: bool) -> np.ndarray:
+        """Any network: follow the population, read lanes and positions, find leaders."""
+        self._follow_population(first)
+        fast, lanes, pop = self._fast, self._lanes, self.table
+        assert lanes is not None and self._following_open is not None
+        ids = pop.ids
         n = len(ids)
-        self.leader = np.full(n, -1, dtype=np.int64)
-        self.follower = np.full(n, -1, dtype=np.int64)
-        self.headway = np.full(n, np.inf)
+        speed = np.fromiter(map(fast.get_speed, ids), np.float64, n)
+        keys = lanes.keys(list(map(fast.get_lane_id, ids)))
+        lane_pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
+        self.odometer = np.fromiter(map(fast.get_distance, ids), np.float64, n)
+        if self.read_xy:
+            xy = np.array(list(_flatten(map(fast.get_position, ids))), dtype=np.float64)
+            self.x, self.y = xy[0::2], xy[1::2]
+        self._lane_key = keys
+        self._lane_pos = lane_pos
+        self.lanes = lanes.lane_index[keys]
+        self.position = lanes.start[keys] + lane_pos
+        self.speed_limit = lanes.speed_limit[keys]
+        self.on_internal = lanes.internal[keys]
+        self._stale_edges = True
+        self.leader, self.follower, self.headway, self.tailway = self._following_open.compute(
+            pop, keys, lane_pos
+        )
+        if pop.continuous.any():
+            self._route_continuously(lanes.edge_index[keys])
+        return speed
 
     def _derive_edges(self) -> None:
-        if self._stale_edges:
+        if self._stale_edges and not self.ring_path:
+            assert self._lanes is not None
+            names = self._lanes.edge_names
+            self._edges_cache = [names[e] for e in self._lanes.edge_index[self._lane_key].tolist()]
+            self._stale_edges = False
+        elif self._stale_edges:
             idx, self._lane_pos = self._ring_edges.locate(self.position)
             self._edges_cache = self._ring_edges.edge_names(idx)
             self._stale_edges = False
@@ -245,6 +304,98 @@ class VehicleKernel:
             ahead = self._distance_to_route_end(here, self.position[i : i + 1])
             self._next_reroute[i] = self.odometer[i] + float(ahead[0])
 
+    # ------------------------------------------------------------------ open networks
+    def _attach_open(self, api: Any, lanes: LaneTable) -> None:
+        self._lanes = lanes
+        self._following_open = Following.of(api)
+        self._route_end = np.full(self.table.size, -1, dtype=np.int64)
+        self._pending_removal = []
+        self._flow_counts.clear()
+        self._version = -1  # rebuild the per-row arrays at the first update
+
+    def _follow_population(self, first: bool) -> None:
+        """Add the cars SUMO inserted, drop those that arrived (or were removed)."""
+        fast, pop = self._fast, self.table
+        departed = [] if first else list(fast.departed_ids())
+        arrived = [] if first else list(fast.arrived_ids())
+        arrived += self._pending_removal
+        self._pending_removal = []
+        if fast.id_count() != pop.size - len(arrived) + len(departed):  # resynchronise
+            now = set(self.api.vehicle.getIDList())
+            arrived = [v for v in pop.ids if v not in now]
+            departed = [v for v in self.api.vehicle.getIDList() if v not in pop]
+        self.departed_ids, self.arrived_ids = departed, arrived
+        self._flow_counts.append((len(departed), len(arrived)))
+        if not departed and not arrived and self._version == pop.version:
+            return
+        gone = pop.rows([vid for vid in set(arrived) if vid in pop])
+        survivors = np.ones(pop.size, dtype=bool)
+        survivors[gone] = False
+        old_route_end = self._route_end
+        old_prev = self.speed
+        pop.remove(arrived)
+        v = self.api.vehicle
+        groups = [pop.class_index(v.getTypeID(vid)) for vid in departed]
+        pop.add(departed, [max(g, 0) for g in groups])
+        for vid, g in zip(departed, groups, strict=True):
+            if g >= 0:  # Flow's modes hold from a car's first step
+                c = pop.classes[g]
+                v.setSpeedMode(vid, c.speed_mode)
+                v.setLaneChangeMode(vid, c.lane_change_mode)
+        src = np.concatenate(
+            (np.flatnonzero(survivors), np.full(pop.size - int(survivors.sum()), -1))
+        )
+        self._resize(src, old_route_end, old_prev)
+        self._version = pop.version
+
+    def _resize(self, src: np.ndarray, old_route_end: np.ndarray, old_speed: np.ndarray) -> None:
+        """Carry per-row state that outlives a step over to the new rows (``src``: each new
+        row's row before the change, -1 for a car that just entered)."""
+        pop, lanes = self.table, self._lanes
+        assert lanes is not None
+        n = pop.size
+        kept = src >= 0
+        carried = np.where(kept, src, 0)
+        self._route_end = np.where(kept, old_route_end[carried] if old_route_end.size else -1, -1)
+        self.speed = np.where(kept, old_speed[carried] if old_speed.size else 0.0, 0.0)
+        self.prev_speed = self.speed
+        self.last_cmd = np.full(n, np.nan)
+        self._no_cmd = np.full(n, np.nan)
+        self.accel_cmd = self._no_cmd.copy()
+        self._all = slice(0, n)
+        rows = np.flatnonzero(~kept | (self._route_end < 0))
+        get_route = self.api.vehicle.getRoute
+        for r in rows.tolist():
+            route = get_route(pop.ids[r])
+            self._route_end[r] = lanes.edge_pos.get(route[-1], -1) if route else -1
+
+    def _route_continuously(self, edge_index: np.ndarray) -> None:
+        """ContinuousRouter on any network: a car on its route's last edge gets a new route
+        starting on that edge (drawn from the edge's route choices)."""
+        due = np.flatnonzero(self.table.continuous & (edge_index == self._route_end))
+        if not due.size:
+            return
+        assert self._lanes is not None
+        names = self._lanes.edge_names
+        for r in due.tolist():
+            edge = names[int(edge_index[r])]
+            choices = self.spec.choices(edge)
+            if not choices:
+                self._route_end[r] = -1
+                continue
+            if len(choices) == 1:
+                route = choices[0][0]
+            else:
+                probs = np.array([p for _, p in choices], dtype=np.float64)
+                route = choices[int(self.rng.choice(len(choices), p=probs / probs.sum()))][0]
+            self.api.vehicle.setRoute(self.table.ids[r], list(route))
+            self._route_end[r] = self._lanes.edge_pos.get(route[-1], -1)
+
+    def remove(self, veh_id: str) -> None:
+        """Take a vehicle out of the simulation (it leaves the arrays at the next step)."""
+        self.api.vehicle.remove(veh_id)
+        self._pending_removal.append(veh_id)
+
     # ------------------------------------------------------------------ commands
     def apply_acceleration(self, veh_ids: str | Sequence[str], acc: Any) -> None:
         """Command accelerations (m/s^2): next-step speed will be ``v + a*dt`` (Flow's rule)."""
@@ -252,10 +403,15 @@ class VehicleKernel:
             veh_ids = [veh_ids]
         accs = np.broadcast_to(np.asarray(acc, dtype=np.float64).reshape(-1), (len(veh_ids),))
         for vid, a in zip(veh_ids, accs, strict=True):
-            self.accel_cmd[self._index[vid]] = a
+            self.accel_cmd[self.table.row(vid)] = a
 
     def apply_acceleration_idx(self, idx: np.ndarray | slice, acc: np.ndarray) -> None:
-        """Command accelerations by vehicle index (the vectorised path controllers use)."""
+        """Command accelerations by vehicle index (the vectorised path controllers use).
+
+        As in Flow, a car on a junction-internal lane is left to SUMO for that step.
+        """
+        if not self.ring_path:
+            acc = np.where(self.on_internal[idx], np.nan, acc)
         self.accel_cmd[idx] = acc
 
     def apply_lane_change(self, veh_ids: str | Sequence[str], direction: Any) -> None:
@@ -265,7 +421,7 @@ class VehicleKernel:
         dirs = np.broadcast_to(np.asarray(direction).reshape(-1), (len(veh_ids),))
         for vid, d in zip(veh_ids, dirs, strict=True):
             if round(float(d)) != 0:
-                self._lane_change[self._index[vid]] = int(np.sign(d))
+                self._lane_change[self.table.row(vid)] = int(np.sign(d))
 
     def choose_routes(self, veh_ids: str | Sequence[str], route_choices: Any) -> None:
         """Give vehicles new routes (lists of edge ids); ``None`` keeps the current one."""
@@ -273,7 +429,7 @@ class VehicleKernel:
             veh_ids, route_choices = [veh_ids], [route_choices]
         for vid, route in zip(veh_ids, route_choices, strict=True):
             if route is not None:
-                self._routes[self._index[vid]] = list(route)
+                self._routes[self.table.row(vid)] = list(route)
 
     def send_commands(self) -> None:
         """Send the buffered commands to SUMO and clear them."""
@@ -294,18 +450,29 @@ class VehicleKernel:
             for i, speed in zip(todo.tolist(), target.tolist(), strict=True):
                 slow_down(ids[i], speed, SLOW_DOWN_DURATION)
         for i, d in self._lane_change.items():
-            edge = self._edge_by_id.get(self.edges[i])
-            lanes = edge.lanes if edge is not None else 1
+            lanes = self._num_lanes(self.edges[i])
             target_lane = min(max(int(self.lanes[i]) + d, 0), lanes - 1)
             if target_lane != self.lanes[i]:
                 v.changeLane(ids[i], target_lane, 100000.0)
         for i, route in self._routes.items():
             v.setRoute(ids[i], route)
-            self._next_reroute[i] = np.inf  # a user-chosen route is not looped
+            if self.ring_path:
+                self._next_reroute[i] = np.inf  # a user-chosen route is not looped
+            elif route and self._lanes is not None:
+                self._route_end[i] = self._lanes.edge_pos.get(route[-1], -1)
         self.last_cmd = cmd
         self.accel_cmd = self._no_cmd.copy()
         self._lane_change = {}
         self._routes = {}
+
+    def _num_lanes(self, edge_id: str) -> int:
+        edge = self._edge_by_id.get(edge_id)
+        if edge is not None:
+            return edge.lanes
+        lanes = self._lanes
+        if lanes is not None and edge_id in lanes.edge_pos:
+            return int((lanes.edge_index == lanes.edge_pos[edge_id]).sum())
+        return 1
 
     # ------------------------------------------------------------------ controller inputs
     def inputs(self, idx: np.ndarray | slice, time: float) -> CarFollowingInputs:
@@ -314,6 +481,7 @@ class VehicleKernel:
             return CarFollowingInputs(
                 self.speed, self.headway, self.leader_speed, self.follower_headway,
                 self.follower_speed, self.speed_limit, self.dt, time,
+                self.table.accels, self.table.decels,
             )  # fmt: skip
         return CarFollowingInputs(
             speed=self.speed[idx],
@@ -324,126 +492,8 @@ class VehicleKernel:
             speed_limit=self.speed_limit[idx],
             dt=self.dt,
             time=time,
+            max_accel=self.table.accels[idx],
+            max_decel=self.table.decels[idx],
         )
 
-    # ------------------------------------------------------------------ Flow's getters
-    @property
-    def num_vehicles(self) -> int:
-        """Number of vehicles in the network."""
-        return self.table.size
 
-    @property
-    def num_rl_vehicles(self) -> int:
-        """Number of RL vehicles in the network."""
-        return int(self.table.is_rl.sum())
-
-    def get_ids(self) -> list[str]:
-        """All vehicle ids, in placement order."""
-        return list(self.table.ids)
-
-    def get_rl_ids(self) -> list[str]:
-        """Ids of the vehicles the RL agent drives."""
-        return [vid for vid, rl in zip(self.table.ids, self.table.is_rl, strict=True) if rl]
-
-    def get_human_ids(self) -> list[str]:
-        """Ids of all vehicles the agent does not drive."""
-        return [vid for vid, rl in zip(self.table.ids, self.table.is_rl, strict=True) if not rl]
-
-    def get_controlled_ids(self) -> list[str]:
-        """Ids of human vehicles whose acceleration a flowrun controller sets."""
-        return [self.table.ids[i] for i in np.flatnonzero(self.table.commanded)]
-
-    def get_ids_by_edge(self, edges: str | Iterable[str]) -> list[str]:
-        """Ids of the vehicles on the given edge(s)."""
-        wanted = {edges} if isinstance(edges, str) else set(edges)
-        return [vid for vid, e in zip(self.table.ids, self.edges, strict=True) if e in wanted]
-
-    def get_type(self, veh_id: str) -> str:
-        """The vehicle's group name."""
-        return self.table.types[self._index[veh_id]]
-
-    def get_speed(self, veh_id: str | Sequence[str], error: float = -1001) -> Any:
-        """Speed in m/s (a list for a list of ids)."""
-        return self._get(self.speed, veh_id)
-
-    def get_x_by_id(self, veh_id: str) -> float:
-        """Position along the network (ring position), m."""
-        return float(self.position[self._index[veh_id]])
-
-    def get_position(self, veh_id: str | Sequence[str]) -> Any:
-        """Position on the current lane, m."""
-        return self._get(self.lane_pos, veh_id)
-
-    def get_2d_position(self, veh_id: str) -> tuple[float, float]:
-        """(x, y) coordinates, m."""
-        i = self._index[veh_id]
-        if not self.read_xy:
-            x, y = self.api.vehicle.getPosition(veh_id)
-            return float(x), float(y)
-        return float(self.x[i]), float(self.y[i])
-
-    def get_edge(self, veh_id: str | Sequence[str]) -> Any:
-        """Edge id."""
-        if isinstance(veh_id, str):
-            return self.edges[self._index[veh_id]]
-        return [self.edges[self._index[v]] for v in veh_id]
-
-    def get_lane(self, veh_id: str | Sequence[str]) -> Any:
-        """Lane index."""
-        if isinstance(veh_id, str):
-            return int(self.lanes[self._index[veh_id]])
-        return [int(self.lanes[self._index[v]]) for v in veh_id]
-
-    def get_headway(self, veh_id: str | Sequence[str]) -> Any:
-        """Bumper-to-bumper gap to the leader, m (``inf`` without leader)."""
-        return self._get(self.headway, veh_id)
-
-    def get_leader(self, veh_id: str) -> str | None:
-        """Id of the vehicle ahead in the same lane, or ``None``."""
-        j = int(self.leader[self._index[veh_id]])
-        return self.table.ids[j] if j >= 0 else None
-
-    def leader_ids(self) -> list[str]:
-        """Leader id of every vehicle (``""`` without leader); reused while the order holds."""
-        if self._leader_ids[0] is not self.leader:
-            ids = self.table.ids
-            self._leader_ids = (
-                self.leader,
-                [ids[j] if j >= 0 else "" for j in self.leader.tolist()],
-            )
-        return self._leader_ids[1]
-
-    def get_follower(self, veh_id: str) -> str | None:
-        """Id of the vehicle behind in the same lane, or ``None``."""
-        j = int(self.follower[self._index[veh_id]])
-        return self.table.ids[j] if j >= 0 else None
-
-    def get_length(self, veh_id: str) -> float:
-        """Vehicle length, m."""
-        return float(self.table.lengths[self._index[veh_id]])
-
-    def get_distance(self, veh_id: str) -> float:
-        """Distance travelled since the episode started, m."""
-        return float(self.odometer[self._index[veh_id]])
-
-    def get_realized_accel(self, veh_id: str) -> float:
-        """Acceleration realised over the last step, m/s^2."""
-        return float(self.accel_real[self._index[veh_id]])
-
-    def get_accel(self, veh_id: str) -> float | None:
-        """Acceleration commanded for the last step, m/s^2 (``None`` when SUMO drove)."""
-        a = float(self.last_cmd[self._index[veh_id]])
-        return a if math.isfinite(a) else None
-
-    def get_max_speed(self, veh_id: str) -> float:
-        """The vehicle type's maximum speed, m/s."""
-        return float(self.table.max_speeds[self._index[veh_id]])
-
-    def get_route(self, veh_id: str) -> tuple[str, ...]:
-        """The route assigned to the vehicle's current edge."""
-        return self.spec.routes.get(self.get_edge(veh_id), ())
-
-    def _get(self, array: np.ndarray, veh_id: str | Sequence[str]) -> Any:
-        if isinstance(veh_id, str):
-            return float(array[self._index[veh_id]])
-        return [float(array[self._index[v]]) for v in veh_id]

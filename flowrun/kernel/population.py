@@ -1,0 +1,200 @@
+"""The vehicles in the network now: a stable slot per vehicle, compact arrays of the live ones.
+
+Vehicles come and go (inflows, arrivals, removals). Each vehicle keeps one *slot* for as long
+as it is in the network (free slots are reused); the kernel's per-step arrays are *compact*:
+row ``r`` is the ``r``-th live vehicle, in the order they entered. On a step where the
+population changes, the compact static arrays are gathered again with one numpy index per
+attribute; on other steps nothing is rebuilt. A closed ring's population never changes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from itertools import compress
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+
+@dataclass(frozen=True)
+class VehicleClass:
+    """Static facts shared by all vehicles of one group (one ``VehicleParams.add`` call).
+
+    Attributes:
+        name: group name, also the SUMO vType id.
+        is_rl: driven by the RL agent.
+        commanded: a flowrun (non-SUMO, non-RL) controller sets its acceleration.
+        continuous: routed by ``ContinuousRouter``.
+        length: vehicle length, m.
+        min_gap: SUMO ``minGap``, m.
+        max_speed: vehicle-type maximum speed, m/s.
+        accel: SUMO ``accel`` (maximum acceleration), m/s^2.
+        decel: SUMO ``decel`` (maximum comfortable deceleration, positive), m/s^2.
+        speed_mode: SUMO speedMode bit set.
+        lane_change_mode: SUMO laneChangeMode bit set.
+    """
+
+    name: str
+    is_rl: bool = False
+    commanded: bool = False
+    continuous: bool = False
+    length: float = 5.0
+    min_gap: float = 2.5
+    max_speed: float = 30.0
+    accel: float = 2.6
+    decel: float = 7.5
+    speed_mode: int = 0
+    lane_change_mode: int = 512
+
+
+@dataclass(frozen=True)
+class VehicleTable:
+    """The vehicles of an episode's start, in placement order, and every group's facts.
+
+    Attributes:
+        classes: one entry per vehicle group (``VehicleParams.groups`` order).
+        ids: vehicle ids (``{group}_{i}``).
+        group: index into ``classes`` of each vehicle.
+        start_edges: edge each vehicle enters on.
+        start_lane_pos: entry position on that edge, m.
+        start_lanes: entry lane.
+        initial_speeds: entry speed, m/s.
+        routes: SUMO route id of each vehicle (``None``: the start edge's route).
+    """
+
+    classes: tuple[VehicleClass, ...]
+    ids: list[str]
+    group: IntArray
+    start_edges: list[str]
+    start_lane_pos: list[float]
+    start_lanes: list[int]
+    initial_speeds: list[float]
+    routes: list[str | None]
+
+    @property
+    def size(self) -> int:
+        """Number of vehicles at the start."""
+        return len(self.ids)
+
+
+class Population:
+    """Who is in the network: slot bookkeeping plus compact per-vehicle static arrays.
+
+    Attributes (compact, one entry per live vehicle, in entry order):
+        ids, types, group, is_rl, commanded, continuous, lengths, min_gaps, max_speeds,
+        accels, decels, speed_modes, lane_change_modes.
+        version: incremented whenever vehicles enter or leave.
+    """
+
+    def __init__(self, classes: Sequence[VehicleClass]) -> None:
+        self.classes = tuple(classes)
+        self._by_name = {c.name: i for i, c in enumerate(self.classes)}
+        cls = self.classes
+        self._c_rl = np.array([c.is_rl for c in cls], dtype=bool)
+        self._c_cmd = np.array([c.commanded for c in cls], dtype=bool)
+        self._c_cont = np.array([c.continuous for c in cls], dtype=bool)
+        self._c_len = np.array([c.length for c in cls], dtype=np.float64)
+        self._c_gap = np.array([c.min_gap for c in cls], dtype=np.float64)
+        self._c_vmax = np.array([c.max_speed for c in cls], dtype=np.float64)
+        self._c_acc = np.array([c.accel for c in cls], dtype=np.float64)
+        self._c_dec = np.array([c.decel for c in cls], dtype=np.float64)
+        self._slot_of: dict[str, int] = {}
+        self._slot_group = np.zeros(0, dtype=np.int64)
+        self._row_of_slot = np.zeros(0, dtype=np.int64)
+        self._free: list[int] = []
+        self.ids: list[str] = []
+        self.slots = np.zeros(0, dtype=np.int64)
+        self.version = 0
+        self._refresh()
+
+    # ------------------------------------------------------------------ changes
+    def class_index(self, type_name: str) -> int:
+        """Index of the group whose SUMO vType is ``type_name`` (-1 for a foreign type)."""
+        return self._by_name.get(type_name, -1)
+
+    def add(self, ids: Sequence[str], groups: Iterable[int]) -> None:
+        """Vehicles that entered the network (appended in the given order)."""
+        if not ids:
+            return
+        new_slots = []
+        for vid, g in zip(ids, groups, strict=True):
+            if vid in self._slot_of:
+                continue
+            slot = self._free.pop() if self._free else self._grow()
+            self._slot_of[vid] = slot
+            self._slot_group[slot] = g
+            new_slots.append(slot)
+            self.ids.append(vid)
+        self.slots = np.concatenate((self.slots, np.array(new_slots, dtype=np.int64)))
+        self._refresh()
+
+    def remove(self, ids: Iterable[str]) -> None:
+        """Vehicles that left the network (unknown ids are ignored)."""
+        gone = [self._slot_of.pop(vid) for vid in ids if vid in self._slot_of]
+        if not gone:
+            return
+        self._free.extend(gone)
+        keep = self._row_of_slot[gone]
+        mask = np.ones(len(self.ids), dtype=bool)
+        mask[keep] = False
+        self.ids = list(compress(self.ids, mask.tolist()))
+        self.slots = self.slots[mask]
+        self._refresh()
+
+    def _grow(self) -> int:
+        slot = self._slot_group.size
+        cap = max(16, 2 * slot)
+        self._slot_group = np.concatenate((self._slot_group, np.zeros(cap - slot, np.int64)))
+        self._row_of_slot = np.concatenate((self._row_of_slot, np.full(cap - slot, -1)))
+        self._free.extend(range(cap - 1, slot, -1))
+        return slot
+
+    def _refresh(self) -> None:
+        self.version += 1
+        self._row_of_slot[self.slots] = np.arange(self.slots.size)
+        g = self._slot_group[self.slots]
+        self.group = g
+        names = [c.name for c in self.classes]
+        self.types = [names[i] for i in g.tolist()]
+        self.is_rl = self._c_rl[g]
+        self.commanded = self._c_cmd[g]
+        self.continuous = self._c_cont[g]
+        self.lengths = self._c_len[g]
+        self.min_gaps = self._c_gap[g]
+        self.max_speeds = self._c_vmax[g]
+        self.accels = self._c_acc[g]
+        self.decels = self._c_dec[g]
+        self.speed_modes = [self.classes[i].speed_mode for i in g.tolist()]
+        self.lane_change_modes = [self.classes[i].lane_change_mode for i in g.tolist()]
+
+    # ------------------------------------------------------------------ lookups
+    @property
+    def size(self) -> int:
+        """Number of vehicles in the network."""
+        return len(self.ids)
+
+    def __contains__(self, veh_id: object) -> bool:
+        return veh_id in self._slot_of
+
+    def row(self, veh_id: str) -> int:
+        """Row of ``veh_id`` in the compact arrays.
+
+        Raises:
+            KeyError: the vehicle is not in the network.
+        """
+        return int(self._row_of_slot[self._slot_of[veh_id]])
+
+    def rows(self, veh_ids: Iterable[str]) -> IntArray:
+        """Rows of several vehicles (``KeyError`` for one not in the network)."""
+        slot_of = self._slot_of
+        slots = np.fromiter((slot_of[v] for v in veh_ids), np.int64)
+        return self._row_of_slot[slots]
+
+    def rows_of_group(self, group: int) -> IntArray:
+        """Rows of the live vehicles of one group, in entry order."""
+        return np.flatnonzero(self.group == group)

@@ -1,0 +1,305 @@
+"""Flow's ``k.vehicle`` getters, served from the per-step snapshot (no SUMO call).
+
+A mixin of :class:`~flowrun.kernel.vehicle.VehicleKernel`: it reads the kernel's compact
+per-step arrays and its :class:`~flowrun.kernel.population.Population`. Unknown vehicle ids
+give Flow's error values (``-1001`` for numbers, ``""`` for edges) where Flow has them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from flowrun.kernel.population import Population
+    from flowrun.networks.base import NetworkSpec
+
+#: Flow's value for "no such vehicle" in numeric getters.
+ERROR = -1001.0
+
+
+class FlowVehicleGetters:
+    """Flow's getters over the kernel's arrays (see :class:`VehicleKernel`)."""
+
+    table: Population
+    spec: NetworkSpec
+    dt: float
+    api: Any
+    read_xy: bool
+    speed: np.ndarray
+    prev_speed: np.ndarray
+    headway: np.ndarray
+    tailway: np.ndarray
+    leader: np.ndarray
+    follower: np.ndarray
+    lanes: np.ndarray
+    position: np.ndarray
+    odometer: np.ndarray
+    speed_limit: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    last_cmd: np.ndarray
+    departed_ids: list[str]
+    arrived_ids: list[str]
+    _flow_counts: deque[tuple[int, int]]
+    _leader_ids: tuple[np.ndarray | None, list[str]]
+
+    @property
+    def edges(self) -> list[str]:  # implemented by the kernel
+        raise NotImplementedError
+
+    @property
+    def lane_pos(self) -> np.ndarray:  # implemented by the kernel
+        raise NotImplementedError
+
+    @property
+    def accel_real(self) -> np.ndarray:  # implemented by the kernel
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ Flow's getters
+    @property
+    def num_vehicles(self) -> int:
+        """Number of vehicles in the network."""
+        return self.table.size
+
+    @property
+    def num_rl_vehicles(self) -> int:
+        """Number of RL vehicles in the network."""
+        return int(self.table.is_rl.sum())
+
+    def get_ids(self) -> list[str]:
+        """All vehicle ids, in placement order."""
+        return list(self.table.ids)
+
+    def get_rl_ids(self) -> list[str]:
+        """Ids of the vehicles the RL agent drives."""
+        return [vid for vid, rl in zip(self.table.ids, self.table.is_rl, strict=True) if rl]
+
+    def get_human_ids(self) -> list[str]:
+        """Ids of all vehicles the agent does not drive."""
+        return [vid for vid, rl in zip(self.table.ids, self.table.is_rl, strict=True) if not rl]
+
+    def get_controlled_ids(self) -> list[str]:
+        """Ids of human vehicles whose acceleration a flowrun controller sets."""
+        return [self.table.ids[i] for i in np.flatnonzero(self.table.commanded)]
+
+    def get_ids_by_edge(self, edges: str | Iterable[str]) -> list[str]:
+        """Ids of the vehicles on the given edge(s)."""
+        wanted = {edges} if isinstance(edges, str) else set(edges)
+        return [vid for vid, e in zip(self.table.ids, self.edges, strict=True) if e in wanted]
+
+    def get_type(self, veh_id: str) -> str:
+        """The vehicle's group name."""
+        return self.table.types[self.table.row(veh_id)]
+
+    def get_speed(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
+        """Speed in m/s (a list for a list of ids; ``error`` for an unknown id)."""
+        return self._get(self.speed, veh_id, error)
+
+    def get_previous_speed(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
+        """Speed at the step before, m/s."""
+        return self._get(self.prev_speed, veh_id, error)
+
+    def get_x_by_id(self, veh_id: str) -> float:
+        """Position along the network, m: the start of the car's edge (junction-internal
+        edges included, see ``k.network.get_x``) plus its lane position; 0 if unknown."""
+        if veh_id not in self.table:
+            return 0.0
+        return float(self.position[self.table.row(veh_id)])
+
+    def get_position(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
+        """Position on the current lane, m."""
+        return self._get(self.lane_pos, veh_id, error)
+
+    def get_2d_position(self, veh_id: str) -> tuple[float, float]:
+        """(x, y) coordinates, m."""
+        i = self.table.row(veh_id)
+        if not self.read_xy:
+            x, y = self.api.vehicle.getPosition(veh_id)
+            return float(x), float(y)
+        return float(self.x[i]), float(self.y[i])
+
+    def get_edge(self, veh_id: str | Sequence[str], error: str = "") -> Any:
+        """Edge id (``error`` for an unknown id)."""
+        if not isinstance(veh_id, str):
+            return [self.get_edge(v, error) for v in veh_id]
+        if veh_id not in self.table:
+            return error
+        return self.edges[self.table.row(veh_id)]
+
+    def get_lane(self, veh_id: str | Sequence[str], error: int = int(ERROR)) -> Any:
+        """Lane index."""
+        if not isinstance(veh_id, str):
+            return [self.get_lane(v, error) for v in veh_id]
+        if veh_id not in self.table:
+            return error
+        return int(self.lanes[self.table.row(veh_id)])
+
+    def get_headway(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
+        """Bumper-to-bumper gap to the leader, m (``inf`` without leader)."""
+        return self._get(self.headway, veh_id, error)
+
+    def get_tailway(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
+        """Gap from the follower's front bumper to this car's rear bumper, m."""
+        return self._get(self.tailway, veh_id, error)
+
+    def get_leader(self, veh_id: str) -> str | None:
+        """Id of the vehicle ahead (in the lane, or past its end along the route) or ``None``."""
+        if veh_id not in self.table:
+            return None
+        j = int(self.leader[self.table.row(veh_id)])
+        return self.table.ids[j] if j >= 0 else None
+
+    def leader_ids(self) -> list[str]:
+        """Leader id of every vehicle (``""`` without leader); reused while the order holds."""
+        if self._leader_ids[0] is not self.leader:
+            ids = self.table.ids
+            self._leader_ids = (
+                self.leader,
+                [ids[j] if j >= 0 else "" for j in self.leader.tolist()],
+            )
+        return self._leader_ids[1]
+
+    def get_follower(self, veh_id: str) -> str | None:
+        """Id of the vehicle behind (in the lane, or before its start), or ``None``."""
+        if veh_id not in self.table:
+            return None
+        j = int(self.follower[self.table.row(veh_id)])
+        return self.table.ids[j] if j >= 0 else None
+
+    def get_length(self, veh_id: str) -> float:
+        """Vehicle length, m."""
+        return float(self.table.lengths[self.table.row(veh_id)])
+
+    def get_distance(self, veh_id: str) -> float:
+        """Distance travelled since the episode started, m."""
+        return float(self.odometer[self.table.row(veh_id)])
+
+    def get_realized_accel(self, veh_id: str) -> float:
+        """Acceleration realised over the last step, m/s^2."""
+        return float(self.accel_real[self.table.row(veh_id)])
+
+    def get_accel(self, veh_id: str) -> float | None:
+        """Acceleration commanded for the last step, m/s^2 (``None`` when SUMO drove)."""
+        a = float(self.last_cmd[self.table.row(veh_id)])
+        return a if math.isfinite(a) else None
+
+    def get_max_speed(self, veh_id: str) -> float:
+        """The vehicle type's maximum speed, m/s."""
+        return float(self.table.max_speeds[self.table.row(veh_id)])
+
+    def get_route(self, veh_id: str) -> tuple[str, ...]:
+        """The edges of the vehicle's route (SUMO's; empty for an unknown id)."""
+        if veh_id not in self.table:
+            return ()
+        return tuple(self.api.vehicle.getRoute(veh_id))
+
+    # ------------------------------------------------------------------ departures, arrivals
+    def get_departed_ids(self) -> list[str]:
+        """Vehicles that entered the network in the last step."""
+        return list(self.departed_ids)
+
+    def get_arrived_ids(self) -> list[str]:
+        """Vehicles that left the network in the last step."""
+        return list(self.arrived_ids)
+
+    def get_num_arrived(self) -> int:
+        """Number of vehicles that left the network in the last step."""
+        return len(self.arrived_ids)
+
+    def get_inflow_rate(self, time_span: float) -> float:
+        """Vehicles that entered over the last ``time_span`` seconds, in veh/hour."""
+        return self._rate(time_span, 0)
+
+    def get_outflow_rate(self, time_span: float) -> float:
+        """Vehicles that left over the last ``time_span`` seconds, in veh/hour."""
+        return self._rate(time_span, 1)
+
+    def _rate(self, time_span: float, column: int) -> float:
+        steps = max(1, round(time_span / self.dt))
+        counts = list(self._flow_counts)[-steps:]
+        if not counts:
+            return 0.0
+        return sum(c[column] for c in counts) * 3600.0 / (len(counts) * self.dt)
+
+    # ------------------------------------------------------------------ lanes around a car
+    def _edge_neighbours(self, veh_id: str) -> tuple[np.ndarray, np.ndarray, int]:
+        """Rows of the cars on the same edge, their lanes, and the edge's lane count."""
+        edges = self.edges
+        row = self.table.row(veh_id)
+        edge = edges[row]
+        same = np.fromiter((e == edge for e in edges), bool, len(edges))
+        rows = np.flatnonzero(same)
+        num_lanes = int(self.lanes[rows].max(initial=0)) + 1
+        num = getattr(self, "_num_lanes", None)
+        if num is not None:
+            num_lanes = max(num_lanes, int(num(edge)))
+        return rows, self.lanes[rows], num_lanes
+
+    def get_lane_leaders(self, veh_id: str) -> list[str]:
+        """The nearest car ahead on each lane of the car's edge (``""`` where none)."""
+        return [self._ids_or_blank(j) for j in self._lane_neighbours(veh_id, ahead=True)[0]]
+
+    def get_lane_headways(self, veh_id: str) -> list[float]:
+        """Gap to the nearest car ahead on each lane of the car's edge, m (``inf``: none)."""
+        return self._lane_neighbours(veh_id, ahead=True)[1]
+
+    def get_lane_followers(self, veh_id: str) -> list[str]:
+        """The nearest car behind on each lane of the car's edge (``""`` where none)."""
+        return [self._ids_or_blank(j) for j in self._lane_neighbours(veh_id, ahead=False)[0]]
+
+    def get_lane_tailways(self, veh_id: str) -> list[float]:
+        """Gap to the nearest car behind on each lane of the car's edge, m (``inf``: none)."""
+        return self._lane_neighbours(veh_id, ahead=False)[1]
+
+    def get_lane_leaders_speed(self, veh_id: str) -> list[float]:
+        """Speed of the nearest car ahead on each lane (0 where none), m/s."""
+        rows = self._lane_neighbours(veh_id, ahead=True)[0]
+        return [float(self.speed[j]) if j >= 0 else 0.0 for j in rows]
+
+    def get_lane_followers_speed(self, veh_id: str) -> list[float]:
+        """Speed of the nearest car behind on each lane (0 where none), m/s."""
+        rows = self._lane_neighbours(veh_id, ahead=False)[0]
+        return [float(self.speed[j]) if j >= 0 else 0.0 for j in rows]
+
+    def _lane_neighbours(self, veh_id: str, ahead: bool) -> tuple[list[int], list[float]]:
+        """Per lane of the car's edge: the nearest car ahead/behind on the same edge and the
+        bumper-to-bumper gap to it. On the car's own lane this is its leader / follower (which
+        may be past the edge's end)."""
+        me = self.table.row(veh_id)
+        rows, lanes, num_lanes = self._edge_neighbours(veh_id)
+        pos, lengths = self.lane_pos, self.table.lengths
+        found: list[int] = []
+        gaps: list[float] = []
+        for lane in range(num_lanes):
+            if lane == int(self.lanes[me]):
+                j = int(self.leader[me] if ahead else self.follower[me])
+                found.append(j)
+                gap = self.headway[me] if ahead else self.tailway[me]
+                gaps.append(float(gap) if j >= 0 else math.inf)
+                continue
+            on = rows[lanes == lane]
+            if ahead:
+                on = on[pos[on] > pos[me]]
+                j = int(on[np.argmin(pos[on])]) if on.size else -1
+                gap = pos[j] - lengths[j] - pos[me] if j >= 0 else math.inf
+            else:
+                on = on[pos[on] <= pos[me]]
+                j = int(on[np.argmax(pos[on])]) if on.size else -1
+                gap = pos[me] - lengths[me] - pos[j] if j >= 0 else math.inf
+            found.append(j)
+            gaps.append(float(gap))
+        return found, gaps
+
+    def _ids_or_blank(self, row: int) -> str:
+        return self.table.ids[row] if row >= 0 else ""
+
+    def _get(self, array: np.ndarray, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
+        table = self.table
+        if isinstance(veh_id, str):
+            return float(array[table.row(veh_id)]) if veh_id in table else error
+        return [float(array[table.row(v)]) if v in table else error for v in veh_id]
