@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import logging
+import math
 from array import array
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
 
+from flowrun.config.model import ExperimentConfig
 from flowrun.envs.base import Env
 from flowrun.envs.frames import batch_stats
+from flowrun.errors import ConfigError
 from flowrun.experiment.metrics import RunAccumulator, RunMetrics
 from flowrun.recording.frames import StepStats, VehicleFrame
 
@@ -39,29 +43,48 @@ Progress = Callable[[int, int], None]
 
 
 class Experiment:
-    """Runs an environment without learning (Flow's ``Experiment(env)``).
+    """Runs an environment without learning (Flow's ``flow.core.experiment.Experiment``).
 
     Args:
-        env: the environment (any :class:`flowrun.envs.Env`).
+        env: the environment (any :class:`flowrun.envs.Env`), as in Flow's tutorial, or Flow's
+            ``flow_params`` dict (``exp_tag, env_name, network, simulator, sim, env, net, veh,
+            initial, tls``), from which the environment is built.
         sink_factory: called with the run index, returns where to record that run (or None).
         progress: called as ``progress(run, step)`` after every step.
+        custom_callables: Flow's ``{name: f(env)}``: each is called after every step and the
+            mean of its values per run is returned under ``name``.
+
+    Attributes:
+        env: the environment.
+        config: the experiment as an :class:`ExperimentConfig` when built from ``flow_params``.
     """
 
     def __init__(
         self,
-        env: Env,
+        env: Env | Mapping[str, Any],
         sink_factory: SinkFactory | None = None,
         progress: Progress | None = None,
+        custom_callables: Mapping[str, Callable[[Env], Any]] | None = None,
     ) -> None:
+        self.config: ExperimentConfig | None = None
+        if isinstance(env, Mapping):
+            from flowrun.config.flow_params import from_flow_params
+            from flowrun.utils.registry import make_flow_env
+
+            flow = from_flow_params(env)
+            self.config = flow.config
+            env = make_flow_env(flow)
         self.env = env
         self.sink_factory = sink_factory
         self.progress = progress
+        self.custom_callables = dict(custom_callables or {})
         self.metrics: list[RunMetrics] = []
+        self.csv_files: list[Path] = []
 
     def run(
         self,
         num_runs: int,
-        num_steps: int,
+        num_steps: int | Callable[[Any], Any] | None = None,
         rl_actions: Callable[[Any], Any] | None = None,
         convert_to_csv: bool = False,
         seed: int | None = None,
@@ -70,37 +93,57 @@ class Experiment:
 
         Args:
             num_runs: number of runs (each starts with ``env.reset``).
-            num_steps: steps per run (a run also ends at a collision or the horizon).
+            num_steps: steps per run (a run also ends at a collision or the horizon);
+                ``None`` means ``env_params.horizon``, as Flow's ``run(num_runs)``. A callable
+                here is taken as ``rl_actions`` (Flow's ``run(num_runs, rl_actions)``).
             rl_actions: maps an observation to an action; ``None`` sends no RL action.
-            convert_to_csv: accepted for Flow compatibility; use ``flowrun replay --csv``.
+            convert_to_csv: write each run's vehicle states as CSV with Flow's emission
+                columns (from its MCAP log: the run's own log when recording, else a log in a
+                new folder under ``sim_params.emission_path``). Paths in ``csv_files``.
             seed: run ``i`` resets with seed ``seed + i``; ``None`` continues the env's
                 generator (first reset seeded by ``sim.seed``).
 
         Returns:
-            Flow's ``info_dict``: ``returns``, ``mean_returns``, ``velocities`` (mean speed of
-            each run), ``mean_velocities``, ``per_step_returns``, plus ``metrics`` (one
-            :class:`RunMetrics` per run).
+            Flow's ``info_dict``: ``returns``, ``mean_returns``, ``per_step_returns``,
+            ``velocities`` (mean speed of each run), ``mean_velocities``, ``outflows``
+            (veh/h over the last 500 s of each run), ``mean_outflows``, one list per custom
+            callable, plus ``metrics`` (one :class:`RunMetrics` per run).
+
+        Raises:
+            ConfigError: no ``num_steps`` and an infinite horizon, or ``convert_to_csv``
+                without anywhere to write.
         """
+        if callable(num_steps):
+            num_steps, rl_actions = None, num_steps
+        steps = self._steps(num_steps)
         env = self.env
+        sink_factory = self.sink_factory
+        if convert_to_csv and sink_factory is None:
+            sink_factory = self._csv_sinks()
         env.collect_stats = True
-        returns, per_step = [], []
+        returns, per_step, outflows = [], [], []
+        custom: dict[str, list[float]] = {key: [] for key in self.custom_callables}
         self.metrics = []
-        env.record_frames = self.sink_factory is not None
+        self.csv_files = []
+        env.record_frames = sink_factory is not None
         for run in range(num_runs):
             sink: FrameSink | None = None
             stats = RunAccumulator()
             ret = 0.0
             rewards = array("d")  # 8 bytes a step: memory stays flat over long runs
+            values: dict[str, list[Any]] = {key: [] for key in self.custom_callables}
             try:
                 obs, _ = env.reset(seed=None if seed is None else seed + run)
-                sink = self.sink_factory(run) if self.sink_factory else None
+                sink = sink_factory(run) if sink_factory else None
                 vehicles = max(env.k.vehicle.num_vehicles, 1)
                 drain_at = max(1, min(DRAIN_EVERY, DRAIN_VEHICLE_STEPS // vehicles))
-                for step in range(num_steps):
+                for step in range(steps):
                     action = rl_actions(obs) if rl_actions is not None else None
                     obs, reward, terminated, truncated, _ = env.step(action)
                     ret += reward
                     rewards.append(reward)
+                    for key, fn in self.custom_callables.items():
+                        values[key].append(fn(env))
                     if len(env.records) >= drain_at:
                         self._drain(sink, stats)
                     if self.progress is not None:
@@ -116,15 +159,50 @@ class Experiment:
                     self.metrics.append(stats.result(run, ret))
             returns.append(ret)
             per_step.append(rewards.tolist())
+            outflows.append(_outflow(env))
+            for key, got in values.items():
+                custom[key].append(float(np.mean(got)) if got else float("nan"))
+            log.info("run %d: return %.3f", run, ret)
+            if convert_to_csv and sink is not None:
+                self._export(sink)
         velocities = [m.mean_speed for m in self.metrics]
         return {
             "returns": returns,
-            "mean_returns": float(np.mean(returns)) if returns else 0.0,
+            "mean_returns": _mean(returns),
             "per_step_returns": per_step,
             "velocities": velocities,
-            "mean_velocities": float(np.mean(velocities)) if velocities else 0.0,
+            "mean_velocities": _mean(velocities),
+            "outflows": outflows,
+            "mean_outflows": _mean(outflows),
+            **custom,
             "metrics": list(self.metrics),
         }
+
+    def _steps(self, num_steps: int | None) -> int:
+        if num_steps is not None:
+            return int(num_steps)
+        horizon = self.env.env_params.horizon
+        if math.isinf(horizon):
+            raise ConfigError(
+                "EnvParams.horizon is infinite, so a run would never end; set "
+                "EnvParams(horizon=...) or pass num_steps",
+                path="env.horizon",
+            )
+        return int(horizon)
+
+    def _csv_sinks(self) -> SinkFactory:
+        from flowrun.experiment.emission import emission_dir, run_recorder
+
+        name = self.config.name if self.config is not None else self.env.network.name
+        folder = emission_dir(self.env, name)
+        return lambda run: run_recorder(folder, self.env, run, self.config)
+
+    def _export(self, sink: FrameSink) -> None:
+        from flowrun.experiment.emission import export_csv
+
+        path = getattr(sink, "path", None)
+        if isinstance(path, Path) and path.suffix == ".mcap":
+            self.csv_files.append(export_csv(path))
 
     def _drain(self, sink: FrameSink | None, stats: RunAccumulator) -> None:
         """Aggregate the queued steps in one batch, fold them in, and write their frames."""
@@ -137,3 +215,13 @@ class Experiment:
             for record, step_stats in zip(records, batch.rows(), strict=True):
                 if record.frame is not None:
                     sink.write(record.frame, step_stats)
+
+
+def _mean(values: list[float]) -> float:
+    return float(np.mean(values)) if values else 0.0
+
+
+def _outflow(env: Env) -> float:
+    """Vehicles that left the network over the last 500 s, per hour (Flow's ``outflows``)."""
+    rate = getattr(env.k.vehicle, "get_outflow_rate", None)
+    return float(rate(500)) if rate is not None else 0.0

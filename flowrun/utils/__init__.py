@@ -1,0 +1,1 @@
+"""Flow's ``flow.utils``: ``registry.make_create_env`` and ``env_constructor``."""
