@@ -19,6 +19,13 @@ from flowrun.cli.common import guarded
 console = Console()
 
 ConfigArg = Annotated[Path, typer.Argument(help="Experiment YAML file.", show_default=False)]
+AnyConfigArg = Annotated[
+    Path,
+    typer.Argument(
+        help="Experiment YAML file, or a Flow config module (.py defining flow_params).",
+        show_default=False,
+    ),
+]
 SetOpt = Annotated[
     list[str] | None,
     typer.Option("--set", help="Override a config value: a.b=value (YAML scalar). Repeatable."),
@@ -111,7 +118,7 @@ def metrics_table(title: str, rows: list[Any]) -> Table:
 
 @guarded
 def baseline(
-    config: ConfigArg,
+    config: AnyConfigArg,
     runs: Annotated[int, typer.Option("--runs", help="Number of runs.")] = 1,
     steps: Annotated[
         int | None, typer.Option("--steps", help="Steps per run (default: env.horizon).")
@@ -125,11 +132,14 @@ def baseline(
         bool, typer.Option("--render", help="Write run 0 as an animated GIF.")
     ] = False,
 ) -> None:
-    """Run a non-RL experiment: N runs of the config's environment, a table, MCAP logs."""
-    from flowrun.config.loader import load_config
+    """Run a non-RL experiment: N runs of the config's environment, a table, MCAP logs.
+
+    CONFIG is a YAML file or a Flow config module (a .py file defining flow_params).
+    """
+    from flowrun.config.flow_module import load_any_config
     from flowrun.experiment.baseline import resolve_steps, run_baseline
 
-    cfg = load_config(config, overrides_with_seed(set_, seed))
+    cfg = load_any_config(config, overrides_with_seed(set_, seed))
     total = resolve_steps(cfg, steps)
     columns = (
         TextColumn("run {task.fields[run]}"),
@@ -171,5 +181,8 @@ def baseline(
 
 
 def register(app: typer.Typer) -> None:
-    """Add the simulation commands to the app."""
+    """Add the simulation commands (and ``convert``, Flow configs to YAML) to the app."""
+    from flowrun.cli import commands_convert
+
     app.command("baseline")(baseline)
+    commands_convert.register(app)
