@@ -29,6 +29,8 @@ _sum = np.add.reduce
 _flatten = chain.from_iterable
 _consume = deque[object](maxlen=0).extend  # runs an iterator to its end, keeping nothing
 
+_NO_ROWS = np.zeros(0, dtype=np.int64)
+
 #: ``slowDown`` duration, s: shorter than a step, so the new speed holds at the next step.
 SLOW_DOWN_DURATION = 1e-3
 
@@ -104,6 +106,7 @@ class VehicleKernel(FlowVehicleGetters):
         self._version = self.table.version
         self._route_end = np.full(n, -1, dtype=np.int64)
         self._pending_removal: list[str] = []
+        self._new_rows = _NO_ROWS
         self.departed_ids: list[str] = []
         self.arrived_ids: list[str] = []
         self._flow_counts: deque[tuple[int, int]] = deque(maxlen=100_000)
@@ -165,18 +168,20 @@ class VehicleKernel(FlowVehicleGetters):
         ~1e-13 m); edges and lane positions follow from it when someone asks.
         """
         fast = self._fast
-        ids = self.table.ids
-        self.prev_speed = self.speed
-        n = len(ids)
-        speed = np.fromiter(map(fast.get_speed, ids), np.float64, n)
         self._accel_real = None
-        if self._multi_lane:
-            self.lanes = np.array(list(map(self.api.vehicle.getLaneIndex, ids)), dtype=np.int64)
-        if self.read_xy:
-            # flattened first: numpy would otherwise inspect every (x, y) tuple's shape
-            xy = np.array(list(_flatten(map(fast.get_position, ids))), dtype=np.float64)
-            self.x, self.y = xy[0::2], xy[1::2]
-        if self.ring_path:
+        if not self.ring_path:
+            speed = self._update_open(first)
+        else:
+            ids = self.table.ids
+            self.prev_speed = self.speed
+            n = len(ids)
+            speed = np.fromiter(map(fast.get_speed, ids), np.float64, n)
+            if self._multi_lane:
+                self.lanes = np.array(list(map(self.api.vehicle.getLaneIndex, ids)), np.int64)
+            if self.read_xy:
+                # flattened first: numpy would otherwise inspect every (x, y) tuple's shape
+                xy = np.array(list(_flatten(map(fast.get_position, ids))), dtype=np.float64)
+                self.x, self.y = xy[0::2], xy[1::2]
             self.odometer = np.fromiter(map(fast.get_distance, ids), np.float64, n)
             unwrapped = self._start_position + self.odometer
             self.position = np.mod(unwrapped, self.spec.length)
@@ -191,8 +196,6 @@ class VehicleKernel(FlowVehicleGetters):
                 )
             else:
                 self.leader, self.follower, self.headway = self._following.compute(unwrapped)
-        else:
-            speed = self._update_open(first)
         if first:
             self.prev_speed = speed
         self.speed = speed
@@ -224,11 +227,16 @@ class VehicleKernel(FlowVehicleGetters):
     def _update_open(self, first: bool) -> np.ndarray:
         """Any network: follow the population, read lanes and positions, find leaders."""
         self._follow_population(first)
+        self.prev_speed = self.speed
         fast, lanes, pop = self._fast, self._lanes, self.table
         assert lanes is not None and self._following_open is not None
         ids = pop.ids
         n = len(ids)
         speed = np.fromiter(map(fast.get_speed, ids), np.float64, n)
+        if self._new_rows.size:  # a car that just entered has no speed before: no acceleration
+            self.prev_speed = self.prev_speed.copy()
+            self.prev_speed[self._new_rows] = speed[self._new_rows]
+            self._new_rows = _NO_ROWS
         keys = lanes.keys(list(map(fast.get_lane_id, ids)))
         lane_pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
         self.odometer = np.fromiter(map(fast.get_distance, ids), np.float64, n)
@@ -363,6 +371,7 @@ class VehicleKernel(FlowVehicleGetters):
         self._no_cmd = np.full(n, np.nan)
         self.accel_cmd = self._no_cmd.copy()
         self._all = slice(0, n)
+        self._new_rows = np.flatnonzero(~kept)
         rows = np.flatnonzero(~kept | (self._route_end < 0))
         get_route = self.api.vehicle.getRoute
         for r in rows.tolist():
