@@ -8,6 +8,7 @@ the same objects with the same checks (see :mod:`flowrun.config.convert`).
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
@@ -106,6 +107,11 @@ def _sumo_str(value: Any) -> str:
     return str(value)
 
 
+def _unset_or(value: float | None, low: float, high: float) -> bool:
+    """``value`` is not given, or ``low < value <= high``."""
+    return value is None or low < value <= high
+
+
 def inflow_problem(flow: InFlow) -> tuple[str, str] | None:
     """What is wrong with an inflow: ``(field, message)``, or ``None`` when it is fine."""
     given = [r for r in RATES if getattr(flow, r) is not None]
@@ -116,9 +122,9 @@ def inflow_problem(flow: InFlow) -> tuple[str, str] | None:
             "an inflow needs exactly one of vehs_per_hour, probability or period; " + found,
         )
     checks: list[tuple[str, bool, str]] = [
-        ("vehs_per_hour", (flow.vehs_per_hour or 1) > 0, "must be greater than 0"),
-        ("probability", 0 < (flow.probability or 1) <= 1, "must be in (0, 1]"),
-        ("period", (flow.period or 1) > 0, "must be greater than 0"),
+        ("vehs_per_hour", _unset_or(flow.vehs_per_hour, 0, math.inf), "must be greater than 0"),
+        ("probability", _unset_or(flow.probability, 0, 1), "must be in (0, 1]"),
+        ("period", _unset_or(flow.period, 0, math.inf), "must be greater than 0"),
         ("begin", flow.begin >= 1, "must be at least 1 s (cars placed at reset come first)"),
         ("end", flow.number is not None or flow.end >= flow.begin, "must not be before begin"),
         ("number", flow.number is None or flow.number >= 1, "must be at least 1"),
