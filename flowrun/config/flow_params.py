@@ -108,8 +108,14 @@ def _network_type(value: Any, where: str) -> tuple[str, type | None]:
         return by_class[value], None
     try:
         network_class(value)
-    except ConfigError as err:
-        raise ConfigError(err.message, "network", where) from None
+    except ConfigError:
+        names = [*by_class, *NETWORKS]
+        raise ConfigError(
+            f"unknown network '{value}'{did_you_mean(value, names)}; "
+            f"expected a class or one of: {', '.join(names)}",
+            "network",
+            where,
+        ) from None
     return value, None
 
 
