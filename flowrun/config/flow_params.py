@@ -88,26 +88,30 @@ def _env_name(value: Any, where: str) -> tuple[str, type | None]:
 
 
 def _network_type(value: Any, where: str) -> tuple[str, type | None]:
+    """``network.type`` of a network class or name, and the class object if one was given."""
     from flowrun.networks.registry import NETWORKS, network_class
 
+    canonical = {cls: name for name, cls in NETWORKS.items()}
     if isinstance(value, type):
-        for name, cls in NETWORKS.items():
-            if cls is value:
-                return name, value
-        names = [c.__name__ for c in NETWORKS.values()]
-        raise ConfigError(
-            f"{value.__qualname__} is not one of flowrun's networks ({', '.join(names)}); "
-            "a network of your own can be given as a .net.xml with NetParams(template=...)",
-            "network",
-            where,
-        )
+        if value in canonical:
+            return canonical[value], value
+        if value.__module__.startswith(("flowrun.networks", "flowrun.scenarios")):
+            value = value.__name__  # e.g. the base ``Network`` (with a template)
+        else:
+            names = [c.__name__ for c in NETWORKS.values()]
+            raise ConfigError(
+                f"{value.__qualname__} is not one of flowrun's networks ({', '.join(names)}); "
+                "a road of your own can be given as a .net.xml with NetParams(template=...)",
+                "network",
+                where,
+            )
     if not isinstance(value, str):
         raise ConfigError(f"expected a network class or its name, got {value!r}", "network", where)
     by_class = {cls.__name__: name for name, cls in NETWORKS.items()}
     if value in by_class:
         return by_class[value], None
     try:
-        network_class(value)
+        return canonical.get(network_class(value), value), None
     except ConfigError:
         names = [*by_class, *NETWORKS]
         raise ConfigError(
@@ -116,7 +120,6 @@ def _network_type(value: Any, where: str) -> tuple[str, type | None]:
             "network",
             where,
         ) from None
-    return value, None
 
 
 def _section(params: Mapping[str, Any], key: str, where: str) -> Any:
