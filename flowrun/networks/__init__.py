@@ -1,6 +1,20 @@
 """Networks described as data and converted to SUMO networks."""
 
 from flowrun.networks.base import Network, NetworkSpec, StartPositions
+from flowrun.networks.figure_eight import FigureEightNetwork
+from flowrun.networks.highway import HighwayNetwork
+from flowrun.networks.merge import MergeNetwork
 from flowrun.networks.ring import ADDITIONAL_NET_PARAMS, RingNetwork
+from flowrun.networks.template import TemplateNetwork
 
-__all__ = ["ADDITIONAL_NET_PARAMS", "Network", "NetworkSpec", "RingNetwork", "StartPositions"]
+__all__ = [
+    "ADDITIONAL_NET_PARAMS",
+    "FigureEightNetwork",
+    "HighwayNetwork",
+    "MergeNetwork",
+    "Network",
+    "NetworkSpec",
+    "RingNetwork",
+    "StartPositions",
+    "TemplateNetwork",
+]

@@ -7,11 +7,35 @@ from typing import Any
 from flowrun.config.params import InitialConfig, VehicleParams
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
+from flowrun.networks.figure_eight import FigureEightNetwork
+from flowrun.networks.highway import HighwayNetwork
+from flowrun.networks.merge import MergeNetwork
 from flowrun.networks.ring import RingNetwork, check_ring_fits
+from flowrun.networks.template import TemplateNetwork
 from flowrun.suggest import unknown_name
 
-NETWORKS: dict[str, type[Network]] = {"ring": RingNetwork}
-_ALIASES = {"loop": "ring", "RingNetwork": "ring", "LoopScenario": "ring"}
+NETWORKS: dict[str, type[Network]] = {
+    "ring": RingNetwork,
+    "figure_eight": FigureEightNetwork,
+    "merge": MergeNetwork,
+    "highway": HighwayNetwork,
+    "template": TemplateNetwork,
+}
+_ALIASES = {
+    "loop": "ring",
+    "RingNetwork": "ring",
+    "LoopScenario": "ring",
+    "figure8": "figure_eight",
+    "FigureEightNetwork": "figure_eight",
+    "FigureEightScenario": "figure_eight",
+    "Figure8Scenario": "figure_eight",
+    "MergeNetwork": "merge",
+    "MergeScenario": "merge",
+    "HighwayNetwork": "highway",
+    "HighwayScenario": "highway",
+    "TemplateNetwork": "template",
+    "Network": "template",
+}
 
 
 def network_names() -> list[str]:
@@ -20,7 +44,7 @@ def network_names() -> list[str]:
 
 
 def network_class(name: str) -> type[Network]:
-    """The network class registered as ``name``.
+    """The network class registered as ``name`` (or one of its Flow class names).
 
     Raises:
         ConfigError: unknown name (with did-you-mean).
@@ -29,6 +53,14 @@ def network_class(name: str) -> type[Network]:
     if key not in NETWORKS:
         raise ConfigError(unknown_name("network type", name, NETWORKS), path="type")
     return NETWORKS[key]
+
+
+def network_table() -> list[tuple[str, str, dict[str, Any]]]:
+    """``(name, Flow class name, parameter defaults)`` of every network type, by name."""
+    return [
+        (name, NETWORKS[name].__name__, dict(NETWORKS[name].ADDITIONAL_NET_PARAMS))
+        for name in network_names()
+    ]
 
 
 def validate_network(

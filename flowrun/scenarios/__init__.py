@@ -1,1 +1,16 @@
-"""Flow's old name for networks: ``flowrun.scenarios.loop.LoopScenario`` is the ring."""
+"""Flow's old names for networks (``flow.scenarios``): ``LoopScenario`` is the ring,
+``Figure8Scenario``/``FigureEightScenario`` the figure eight, ``MergeScenario`` the merge and
+``HighwayScenario`` the highway."""
+
+from flowrun.networks.figure_eight import Figure8Scenario, FigureEightScenario
+from flowrun.networks.highway import HighwayScenario
+from flowrun.networks.merge import MergeScenario
+from flowrun.networks.ring import LoopScenario
+
+__all__ = [
+    "Figure8Scenario",
+    "FigureEightScenario",
+    "HighwayScenario",
+    "LoopScenario",
+    "MergeScenario",
+]
