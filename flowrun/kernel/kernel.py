@@ -79,6 +79,7 @@ class Kernel:
         self.vehicle.read_xy = read_xy
         self.vehicle.attach(api, lanes)
         self.simulation.attach(api)
+        self.simulation.before_step = self.vehicle.send_commands
         self.vehicle.update(first=True)
 
     def _insert(self, api: Any, table: VehicleTable) -> None:
@@ -108,9 +109,12 @@ class Kernel:
 
     def step(self) -> None:
         """Send buffered commands, advance one step, read the new state."""
-        self.vehicle.send_commands()
         self.simulation.simulation_step()
         self.vehicle.update()
+
+    def update(self, reset: bool = False) -> None:
+        """Read the new state after a ``simulation_step`` (Flow's ``k.update(reset)``)."""
+        self.vehicle.update(reset)
 
     def close(self) -> None:
         """Stop SUMO (safe to call twice)."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from flowrun.kernel.sumo import FastCalls
@@ -20,6 +21,9 @@ class SimulationKernel:
         self.step_collisions = 0
         self.step_teleports = 0
         self.colliding_ids: list[str] = []
+        #: called right before each step: the vehicle kernel's buffered commands go out, so
+        #: Flow's ``apply_acceleration(...); simulation_step(); update(False)`` works as in Flow
+        self.before_step: Callable[[], None] | None = None
 
     def attach(self, api: Any) -> None:
         """Bind to a freshly started simulation and zero the counters."""
@@ -32,7 +36,9 @@ class SimulationKernel:
         self.time = float(api.simulation.getTime())
 
     def simulation_step(self) -> None:
-        """Advance SUMO by one step and count what it reported."""
+        """Send pending vehicle commands, advance SUMO by one step, count what it reported."""
+        if self.before_step is not None:
+            self.before_step()
         fast = self._fast
         fast.sim_step(0.0)
         self.step_count += 1

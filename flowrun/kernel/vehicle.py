@@ -428,6 +428,8 @@ class VehicleKernel(FlowVehicleGetters):
         if isinstance(veh_ids, str):
             veh_ids = [veh_ids]
         dirs = np.broadcast_to(np.asarray(direction).reshape(-1), (len(veh_ids),))
+        if any(round(float(d)) not in (-1, 0, 1) for d in dirs):
+            raise ValueError("Direction values for lane changes may only be: -1, 0, or 1.")
         for vid, d in zip(veh_ids, dirs, strict=True):
             if round(float(d)) != 0:
                 self._lane_change[self.table.row(vid)] = int(np.sign(d))

@@ -1,0 +1,44 @@
+"""Flow's own step order works: ``apply_*``, then ``k.simulation.simulation_step()``, then
+``k.vehicle.update(False)`` gives the commanded speeds and lanes (real SUMO)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from flowrun.envs.factory import make_env
+from tests.conftest import load
+
+pytestmark = pytest.mark.sumo
+
+
+def test_accelerations_applied_before_a_bare_simulation_step_take_effect() -> None:
+    env = make_env(load("sugiyama"))
+    try:
+        env.reset(seed=0)
+        k = env.k
+        for _ in range(20):
+            env.step(None)
+        ids = k.vehicle.get_ids()
+        v0 = np.array(k.vehicle.get_speed(ids))
+        accel = np.linspace(-0.5, 0.5, len(ids))
+        k.vehicle.apply_acceleration(ids, accel)
+        k.simulation.simulation_step()
+        k.vehicle.update(False)
+        expected = np.maximum(v0 + accel * k.simulation.sim_step, 0.0)
+        assert np.array(k.vehicle.get_speed(ids)) == pytest.approx(expected, abs=1e-9)
+    finally:
+        env.close()
+
+
+def test_lane_change_directions_other_than_minus_one_zero_one_are_refused() -> None:
+    env = make_env(load("sugiyama"))
+    try:
+        env.reset(seed=0)
+        vid = env.k.vehicle.get_ids()[0]
+        for bad in (2, 3, -2):
+            with pytest.raises(ValueError, match="-1, 0, or 1"):
+                env.k.vehicle.apply_lane_change(vid, bad)
+        env.k.vehicle.apply_lane_change(vid, 1)  # accepted (one lane: nothing to do)
+    finally:
+        env.close()
