@@ -237,3 +237,18 @@ def test_python_inflows_dump_and_load_equal() -> None:
         name="x", network=NetworkConfig("ring", NetParams(inflows=flows)), vehicles=vehicles
     )
     assert config_from_dict(yaml.safe_load(dump_config(cfg))) == cfg
+
+
+def test_a_network_that_cannot_be_built_is_reported_at_its_key(tmp_path: Path) -> None:
+    err, file = load_error(
+        tmp_path,
+        """\
+        name: x
+        network:
+          type: template
+          template: nowhere.net.xml
+        vehicles: []
+        """,
+    )
+    assert (err.location, err.path) == (f"{file}:4", "network.template")
+    assert "nowhere.net.xml" in err.message

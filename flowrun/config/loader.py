@@ -22,7 +22,7 @@ from flowrun.config.model import ExperimentConfig
 from flowrun.config.overrides import apply_overrides, parse_key
 from flowrun.config.params import VehicleType
 from flowrun.config.yamlio import KeyPath, Locations, parse_yaml
-from flowrun.errors import ConfigError
+from flowrun.errors import ConfigError, FlowrunError
 from flowrun.suggest import did_you_mean
 
 # Controller fields of a vehicle group and the controller kind each one takes.
@@ -96,7 +96,8 @@ def _build(data: dict[str, Any], loc: Locations) -> ExperimentConfig:
     _check_group_ids(cfg, data, loc)
     _check_controllers(cfg, data, loc)
     _check_network(cfg, loc)
-    _check_inflows(cfg, loc)
+    edges = _network_edges(cfg, loc)
+    _check_inflows(cfg, edges, loc)
     return cfg
 
 
@@ -189,7 +190,7 @@ def _param_path(err: ConfigError, params: Mapping[str, Any]) -> KeyPath:
     return ()
 
 
-def _check_inflows(cfg: ExperimentConfig, loc: Locations) -> None:
+def _check_inflows(cfg: ExperimentConfig, edges: list[str] | None, loc: Locations) -> None:
     inflows = cfg.network.net_params.inflows
     if inflows is None:
         return
@@ -201,7 +202,6 @@ def _check_inflows(cfg: ExperimentConfig, loc: Locations) -> None:
                 f"inflows use the id of a group under vehicles: {', '.join(types) or '(none)'}",
                 ("network", "inflows", j, "veh_type"),
             )
-    edges = _network_edges(cfg)
     for j, flow in enumerate(inflows.get()):
         if edges is not None and flow.edge not in edges:
             raise loc.error(
@@ -211,16 +211,23 @@ def _check_inflows(cfg: ExperimentConfig, loc: Locations) -> None:
             )
 
 
-def _network_edges(cfg: ExperimentConfig) -> list[str] | None:
-    """The edge ids of the config's network (``None`` when it cannot be built yet)."""
+def _network_edges(cfg: ExperimentConfig, loc: Locations) -> list[str] | None:
+    """Build the config's network (its road, not SUMO's files) and return its edge ids.
+
+    ``None`` while ``flowrun.networks`` is not importable. A network that cannot be built (a
+    missing template file, a route over unconnected edges, ...) is reported at its key.
+    """
     find = _optional("flowrun.networks.registry", "network_class")
     if find is None:
         return None
     try:
         cls = find(cfg.network.type)
         network = cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial)
-    except ConfigError:
-        return None  # reported by _check_network, with its own path
+    except ConfigError as err:
+        message = f"{err.location}: {err.message}" if err.location else err.message
+        raise loc.error(message, ("network", *_sub_path(err.path))) from None
+    except FlowrunError as err:  # e.g. netconvert refusing an OpenStreetMap file
+        raise loc.error(str(err), ("network",)) from None
     return [edge.id for edge in network.spec.edges]
 
 
