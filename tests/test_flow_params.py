@@ -184,6 +184,12 @@ def test_run_takes_rl_actions_and_custom_callables() -> None:
     assert len(info["returns"]) == 2
 
 
+def test_flow_positional_callables_and_rl_actions() -> None:
+    exp = Experiment(ring_params(), {"t": lambda env: env.k.simulation.time})
+    info = exp.run(1, lambda state: None)  # Flow's run(num_runs, rl_actions)
+    assert len(info["per_step_returns"][0]) == HORIZON and info["t"][0] > 0
+
+
 def test_infinite_horizon_needs_num_steps() -> None:
     exp = Experiment(ring_params(env=EnvParams(additional_params=ADDITIONAL_ENV_PARAMS)))
     with pytest.raises(ConfigError, match="horizon is infinite"):

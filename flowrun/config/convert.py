@@ -199,26 +199,25 @@ class Converter:
                 f"got {show(data)}",
                 path,
             )
+        fields = [f.name for f in dataclasses.fields(InFlow)]
         flows = []
         for i, item in enumerate(data):
             at = (*path, i)
-            if isinstance(item, Mapping):
-                for key in item:
-                    if key in CAMEL_CASE:
-                        raise self.loc.error(
-                            f"'{key}' is Flow's old spelling; write '{CAMEL_CASE[key]}'",
-                            (*at, key),
-                        )
+            for key in item if isinstance(item, Mapping) else ():
+                if key in CAMEL_CASE:
+                    raise self.loc.error(
+                        f"'{key}' is Flow's old spelling; write '{CAMEL_CASE[key]}'", (*at, key)
+                    )
+                if key not in fields:
+                    raise self.loc.error(
+                        f"unknown key '{key}'{did_you_mean(str(key), fields)}; expected one of: "
+                        f"{', '.join(fields)} (other SUMO <flow> attributes go under 'extra')",
+                        (*at, key),
+                    )
             try:
                 flows.append(self.section(InFlow, item, at))
             except ConfigError as err:
-                if err.location:  # located already (a key, type or value check)
-                    if "unknown key" in err.message:
-                        raise ConfigError(
-                            err.message + "; other SUMO <flow> attributes go under 'extra'",
-                            err.path,
-                            err.location,
-                        ) from None
+                if err.location:  # located already (a type or value check)
                     raise
                 # InFlow's own cross-field check (rates, begin/end): at the field it names
                 field_at = (*at, err.path) if err.path else at

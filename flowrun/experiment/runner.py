@@ -50,6 +50,7 @@ class Experiment:
             ``flow_params`` dict (``exp_tag, env_name, network, simulator, sim, env, net, veh,
             initial, tls``), from which the environment is built.
         sink_factory: called with the run index, returns where to record that run (or None).
+            A dict here is taken as ``custom_callables`` (Flow's positional second argument).
         progress: called as ``progress(run, step)`` after every step.
         custom_callables: Flow's ``{name: f(env)}``: each is called after every step and the
             mean of its values per run is returned under ``name``.
@@ -62,10 +63,12 @@ class Experiment:
     def __init__(
         self,
         env: Env | Mapping[str, Any],
-        sink_factory: SinkFactory | None = None,
+        sink_factory: SinkFactory | Mapping[str, Callable[[Env], Any]] | None = None,
         progress: Progress | None = None,
         custom_callables: Mapping[str, Callable[[Env], Any]] | None = None,
     ) -> None:
+        if isinstance(sink_factory, Mapping):  # Flow's ``Experiment(flow_params, callables)``
+            sink_factory, custom_callables = None, sink_factory
         self.config: ExperimentConfig | None = None
         if isinstance(env, Mapping):
             from flowrun.config.flow_params import from_flow_params
