@@ -13,6 +13,7 @@ import importlib.util
 import os
 import sys
 import traceback
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
@@ -56,7 +57,10 @@ def _import(file: Path, source: str) -> ModuleType:
     previous = sys.modules.get(name)
     sys.modules[name] = module
     try:
-        spec.loader.exec_module(module)
+        with warnings.catch_warnings():
+            # Flow's deprecated spellings (InFlows.add(vehsPerHour=...)) are shown, not hidden
+            warnings.simplefilter("default", DeprecationWarning)
+            spec.loader.exec_module(module)
     except (KeyboardInterrupt, SystemExit) as err:
         _restore(name, previous)
         if isinstance(err, KeyboardInterrupt):
