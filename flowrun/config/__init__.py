@@ -4,6 +4,7 @@ from flowrun.config.model import ExperimentConfig, NetworkConfig, TrainConfig
 from flowrun.config.params import (
     ControllerSpec,
     EnvParams,
+    InFlow,
     InFlows,
     InitialConfig,
     NetParams,
@@ -19,6 +20,7 @@ __all__ = [
     "ControllerSpec",
     "EnvParams",
     "ExperimentConfig",
+    "InFlow",
     "InFlows",
     "InitialConfig",
     "NetParams",
