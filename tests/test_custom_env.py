@@ -208,9 +208,11 @@ def test_a_failing_user_env_marks_its_run_folder_failed(fresh_imports, tmp_path,
     (package / "__init__.py").write_text(
         textwrap.dedent(
             """
-            from flowrun.envs import Env
+            from flowrun.envs import AccelEnv
 
-            class Broken(Env):
+            class Broken(AccelEnv):
+                ADDITIONAL_ENV_PARAMS = {}
+
                 def __init__(self, *args, **kwargs):
                     raise RuntimeError("my bug")
             """
@@ -222,6 +224,21 @@ def test_a_failing_user_env_marks_its_run_folder_failed(fresh_imports, tmp_path,
         run_baseline(cfg, steps=5, out=tmp_path / "runs")
     (metrics,) = (tmp_path / "runs").glob("custom_env/*/metrics.json")
     assert json.loads(metrics.read_text())["status"] == "failed"
+
+
+def test_an_env_class_missing_flows_abstract_methods_is_a_config_error(
+    fresh_imports, tmp_path, monkeypatch
+):
+    package = tmp_path / "half_envs"
+    package.mkdir()
+    (package / "__init__.py").write_text(
+        "from flowrun.envs import Env\n\nclass Half(Env):\n    def get_state(self):\n"
+        "        return []\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    cfg = load_config(write_config(tmp_path, **{"class": "half_envs:Half"}))
+    with pytest.raises(ConfigError, match="does not implement _apply_rl_actions, action_space"):
+        run_baseline(cfg, steps=5, out=tmp_path / "runs")
 
 
 def test_train_reports_a_misspelt_env_class_before_making_a_run_folder(fresh_imports, tmp_path):

@@ -14,6 +14,7 @@ import contextlib
 import logging
 import shutil
 import tempfile
+from abc import ABCMeta, abstractmethod
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, ClassVar
@@ -28,6 +29,7 @@ from flowrun.envs.vehicles import GroupControl, build_controllers, build_table
 from flowrun.errors import ConfigError
 from flowrun.kernel import Kernel
 from flowrun.kernel.geometry import RingPlacement
+from flowrun.kernel.network import NetworkKernel
 from flowrun.kernel.sumo import gui_available
 from flowrun.networks.base import Network
 
@@ -48,7 +50,7 @@ def check_additional_params(cls: type, env_params: EnvParams) -> None:
         )
 
 
-class Env(gymnasium.Env):
+class Env(gymnasium.Env, metaclass=ABCMeta):
     """Base class of flowrun environments (Flow's ``flow.envs.Env``).
 
     Args:
@@ -78,11 +80,16 @@ class Env(gymnasium.Env):
         self,
         env_params: EnvParams,
         sim_params: SumoParams,
-        network: Network,
+        network: Network | None = None,
         simulator: str = "traci",
+        scenario: Network | None = None,
         render_mode: str | None = None,
         work_dir: Path | None = None,
     ) -> None:
+        if network is None:
+            network = scenario  # Flow < 0.5 keyword
+        if network is None:
+            raise ConfigError("Env needs a network (network=... or Flow's old scenario=...)")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ConfigError(
                 f"render_mode {render_mode!r} is not supported; use None or 'rgb_array'"
@@ -105,6 +112,7 @@ class Env(gymnasium.Env):
         if sim_params.render and not gui:
             log.warning("render=True but no display or sumo-gui here: running headless")
         self.k = Kernel(sim_params, self.work_dir, gui=gui)
+        self.k.network = NetworkKernel(network.spec)  # Flow: available before the first reset
         self.controls: list[GroupControl] = build_controllers(network.vehicles)
         self.step_counter = 0
         self.time_counter = 0
@@ -122,13 +130,23 @@ class Env(gymnasium.Env):
         self._bounds: tuple[np.ndarray, np.ndarray] | tuple[()] | None = None
 
     # ------------------------------------------------------------------ Flow's hooks
+    @property
+    @abstractmethod
+    def action_space(self) -> gymnasium.Space[Any]:  # type: ignore[override]
+        """The agent's action space (subclasses implement)."""
+
+    @property
+    @abstractmethod
+    def observation_space(self) -> gymnasium.Space[Any]:  # type: ignore[override]
+        """The observation space (subclasses implement)."""
+
+    @abstractmethod
     def _apply_rl_actions(self, rl_actions: Any) -> None:
         """Turn the agent's action into commands (subclasses implement)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def get_state(self) -> Any:
         """The observation (subclasses implement)."""
-        raise NotImplementedError
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """The reward of the last step (subclasses implement)."""
@@ -188,8 +206,9 @@ class Env(gymnasium.Env):
         obs = self._format_obs(self.get_state())
         return obs, self._info(crash=False)
 
-    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
-        """Apply the action for ``sims_per_step`` simulation steps."""
+    def step(self, rl_actions: Any = None) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """Apply the action (Flow's keyword ``rl_actions``) for ``sims_per_step`` steps."""
+        action = rl_actions
         if self._needs_reset:
             raise gymnasium.error.ResetNeeded("call reset() before step()")
         if not self.k.started:
@@ -304,6 +323,10 @@ class Env(gymnasium.Env):
         if self.render_mode != "rgb_array" or (self._needs_reset and not self.k.started):
             return None
         return render_ring(self.k)
+
+    def terminate(self) -> None:
+        """Flow's name for :meth:`close`."""
+        self.close()
 
     def close(self) -> None:
         """Stop SUMO and remove the private work folder (safe to call twice)."""

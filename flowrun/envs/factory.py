@@ -41,6 +41,14 @@ def env_class(cfg: ExperimentConfig) -> type[Env]:
     search_dir = Path(cfg.source).resolve().parent if cfg.source else None
     try:
         cls: type[Env] = resolve_env_class(cfg.env.env_class, search_dir)
+        missing = sorted(getattr(cls, "__abstractmethods__", ()))
+        if missing:
+            raise ConfigError(
+                f"environment class {cls.__name__} does not implement {', '.join(missing)}; "
+                "an Env subclass defines action_space, observation_space, _apply_rl_actions "
+                "and get_state (see the README's 'Write your own environment')",
+                path="env.class",
+            )
         check_additional_params(cls, cfg.env)
     except ConfigError as err:
         if cfg.source and not err.location:

@@ -107,6 +107,8 @@ def build_table(
                 is_rl=bool(c.is_rl),
                 commanded=bool(c.commands_sumo and not c.is_rl),
                 continuous=routed,
+                lane_controlled=g.lane_change_controller.type
+                not in ("SimLaneChangeController", "SimLaneChange"),
                 length=float(cf.length),
                 min_gap=float(cf.min_gap),
                 max_speed=float(cf.max_speed),

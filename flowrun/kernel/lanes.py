@@ -36,6 +36,7 @@ class LaneTable:
     def __init__(self, lanes: list[tuple[str, float, float]], links: dict[str, list[Any]],
                  spec: NetworkSpec) -> None:  # fmt: skip
         self.key = {lane: i for i, (lane, _, _) in enumerate(lanes)}
+        self.links = links
         edges: dict[str, int] = {}
         edge_index, lane_index = [], []
         for lane, _, _ in lanes:
@@ -63,6 +64,24 @@ class LaneTable:
         lanes = [(i, float(lane.getLength(i)), float(lane.getMaxSpeed(i))) for i in ids]
         links = {i: list(lane.getLinks(i)) for i in ids}
         return cls(lanes, links, spec)
+
+    def next_lanes(self, edge: str, lane: int) -> list[tuple[str, int]]:
+        """Flow's ``next_edge``: where lane ``lane`` of ``edge`` leads, as (edge, lane) pairs;
+        through a junction-internal lane when there is one."""
+        out = []
+        for link in self.links.get(f"{edge}_{lane}", ()):
+            out.append(lane_edge(link[4] or link[0]))
+        return out
+
+    def prev_lanes(self, edge: str, lane: int) -> list[tuple[str, int]]:
+        """Flow's ``prev_edge``: the (edge, lane) pairs leading into lane ``lane`` of ``edge``."""
+        target = f"{edge}_{lane}"
+        out = []
+        for source, links in self.links.items():
+            for link in links:
+                if link[4] == target or (link[0] == target and not link[4]):
+                    out.append(lane_edge(source))
+        return out
 
     def keys(self, lane_ids: list[str]) -> IntArray:
         """Keys of many lane ids."""

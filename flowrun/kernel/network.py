@@ -49,19 +49,55 @@ class NetworkKernel:
         return list(self._edges)
 
     def num_lanes(self, edge_id: str) -> int:
-        """Number of lanes of an edge."""
-        return self._edges[edge_id].lanes
+        """Number of lanes of an edge (-1001 for an unknown edge, as Flow)."""
+        if edge_id in self._edges:
+            return self._edges[edge_id].lanes
+        lanes = self.lanes
+        if lanes is not None and edge_id in lanes.edge_pos:
+            return int((lanes.edge_index == lanes.edge_pos[edge_id]).sum())
+        return -1001
 
     def speed_limit(self, edge_id: str) -> float:
-        """Speed limit of an edge, m/s."""
-        return self._edges[edge_id].speed
+        """Speed limit of an edge, m/s (-1001 for an unknown edge, as Flow)."""
+        if edge_id in self._edges:
+            return self._edges[edge_id].speed
+        lanes = self.lanes
+        if lanes is not None and edge_id in lanes.edge_pos:
+            return float(lanes.speed_limit[lanes.edge_index == lanes.edge_pos[edge_id]].max())
+        return -1001.0
+
+    def next_edge(self, edge: str, lane: int) -> list[tuple[str, int]]:
+        """The (edge, lane) pairs lane ``lane`` of ``edge`` leads to (empty if none/unknown).
+
+        Known once the simulation has started (the junctions are SUMO's).
+        """
+        if self.lanes is not None:
+            return self.lanes.next_lanes(edge, lane)
+        if self.spec.closed and edge in self._edges:
+            ids = [e.id for e in self.spec.edges]
+            nxt = self.spec.edges[(ids.index(edge) + 1) % len(ids)]
+            return [(nxt.id, lane)] if lane < nxt.lanes else []
+        return []
+
+    def prev_edge(self, edge: str, lane: int) -> list[tuple[str, int]]:
+        """The (edge, lane) pairs that lead into lane ``lane`` of ``edge``."""
+        if self.lanes is not None:
+            return self.lanes.prev_lanes(edge, lane)
+        if self.spec.closed and edge in self._edges:
+            ids = [e.id for e in self.spec.edges]
+            prev = self.spec.edges[(ids.index(edge) - 1) % len(ids)]
+            return [(prev.id, lane)] if lane < prev.lanes else []
+        return []
 
     def max_speed(self) -> float:
         """Highest speed limit in the network, m/s."""
         return self._max_speed
 
     def get_x(self, edge: str, position: float) -> float:
-        """Position along the network of ``position`` metres into ``edge``."""
+        """Position along the network of ``position`` metres into ``edge`` (-1001 for an
+        unknown edge, as Flow)."""
+        if edge not in self._edge_starts:
+            return -1001.0
         return self._edge_starts[edge] + position
 
     def get_edge(self, x: float) -> tuple[str, float]:

@@ -30,6 +30,7 @@ class VehicleClass:
         is_rl: driven by the RL agent.
         commanded: a flowrun (non-SUMO, non-RL) controller sets its acceleration.
         continuous: routed by ``ContinuousRouter``.
+        lane_controlled: a flowrun lane-change controller (not SUMO's) decides its lanes.
         length: vehicle length, m.
         min_gap: SUMO ``minGap``, m.
         max_speed: vehicle-type maximum speed, m/s.
@@ -43,6 +44,7 @@ class VehicleClass:
     is_rl: bool = False
     commanded: bool = False
     continuous: bool = False
+    lane_controlled: bool = False
     length: float = 5.0
     min_gap: float = 2.5
     max_speed: float = 30.0
@@ -98,6 +100,7 @@ class Population:
         self._c_rl = np.array([c.is_rl for c in cls], dtype=bool)
         self._c_cmd = np.array([c.commanded for c in cls], dtype=bool)
         self._c_cont = np.array([c.continuous for c in cls], dtype=bool)
+        self._c_lc = np.array([c.lane_controlled for c in cls], dtype=bool)
         self._c_len = np.array([c.length for c in cls], dtype=np.float64)
         self._c_gap = np.array([c.min_gap for c in cls], dtype=np.float64)
         self._c_vmax = np.array([c.max_speed for c in cls], dtype=np.float64)
@@ -164,6 +167,7 @@ class Population:
         self.is_rl = self._c_rl[g]
         self.commanded = self._c_cmd[g]
         self.continuous = self._c_cont[g]
+        self.lane_controlled = self._c_lc[g]
         self.lengths = self._c_len[g]
         self.min_gaps = self._c_gap[g]
         self.max_speeds = self._c_vmax[g]

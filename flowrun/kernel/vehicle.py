@@ -107,6 +107,7 @@ class VehicleKernel(FlowVehicleGetters):
         self._route_end = np.full(n, -1, dtype=np.int64)
         self._pending_removal: list[str] = []
         self._new_rows = _NO_ROWS
+        self._observed: dict[str, None] = {}
         self.departed_ids: list[str] = []
         self.arrived_ids: list[str] = []
         self._flow_counts: deque[tuple[int, int]] = deque(maxlen=100_000)

@@ -47,6 +47,9 @@ class FlowVehicleGetters:
     arrived_ids: list[str]
     _flow_counts: deque[tuple[int, int]]
     _leader_ids: tuple[np.ndarray | None, list[str]]
+    _observed: dict[str, None]
+    _edges_cache: list[str] | None
+    _stale_edges: bool
 
     @property
     def edges(self) -> list[str]:  # implemented by the kernel
@@ -86,6 +89,50 @@ class FlowVehicleGetters:
     def get_controlled_ids(self) -> list[str]:
         """Ids of human vehicles whose acceleration a flowrun controller sets."""
         return [self.table.ids[i] for i in np.flatnonzero(self.table.commanded)]
+
+    def get_controlled_lc_ids(self) -> list[str]:
+        """Ids of vehicles whose lane changes a flowrun lane-change controller decides."""
+        return [self.table.ids[i] for i in np.flatnonzero(self.table.lane_controlled)]
+
+    # ------------------------------------------------------------------ Flow's extras
+    def get_observed_ids(self) -> list[str]:
+        """Vehicles an environment marked as observed (Flow: coloured in the GUI)."""
+        return [v for v in self._observed if v in self.table]
+
+    def set_observed(self, veh_id: str) -> None:
+        """Mark a vehicle as observed."""
+        self._observed.setdefault(veh_id, None)
+
+    def remove_observed(self, veh_id: str) -> None:
+        """Unmark a vehicle as observed."""
+        self._observed.pop(veh_id, None)
+
+    def get_color(self, veh_id: str) -> tuple[int, int, int]:
+        """The vehicle's colour (red, green, blue; 0-255)."""
+        r, g, b, _ = self.api.vehicle.getColor(veh_id)
+        return int(r), int(g), int(b)
+
+    def set_color(self, veh_id: str, color: tuple[int, int, int]) -> None:
+        """Set the vehicle's colour (red, green, blue; 0-255)."""
+        r, g, b = color
+        self.api.vehicle.setColor(veh_id, (int(r), int(g), int(b), 255))
+
+    def set_headway(self, veh_id: str, headway: float) -> None:
+        """Overwrite the vehicle's headway until the next step (Flow's test hook)."""
+        self.headway = self.headway.copy()  # frames may hold the old array
+        self.headway[self.table.row(veh_id)] = headway
+
+    def test_set_speed(self, veh_id: str, speed: float) -> None:
+        """Overwrite the vehicle's speed until the next step (Flow's test hook)."""
+        self.speed = self.speed.copy()
+        self.speed[self.table.row(veh_id)] = speed
+
+    def test_set_edge(self, veh_id: str, edge: str) -> None:
+        """Overwrite the vehicle's edge until the next step (Flow's test hook)."""
+        edges = list(self.edges)
+        edges[self.table.row(veh_id)] = edge
+        self._edges_cache = edges
+        self._stale_edges = False
 
     def get_ids_by_edge(self, edges: str | Iterable[str]) -> list[str]:
         """Ids of the vehicles on the given edge(s)."""
