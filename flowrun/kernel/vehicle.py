@@ -251,11 +251,11 @@ class VehicleKernel(FlowVehicleGetters):
         self.speed_limit = lanes.speed_limit[keys]
         self.on_internal = lanes.internal[keys]
         self._stale_edges = True
+        if pop.continuous.any():  # before the look-ahead, which follows the new route
+            self._route_continuously(lanes.edge_index[keys])
         self.leader, self.follower, self.headway, self.tailway = self._following_open.compute(
             pop, keys, lane_pos
         )
-        if pop.continuous.any():
-            self._route_continuously(lanes.edge_index[keys])
         return speed
 
     def _derive_edges(self) -> None:
