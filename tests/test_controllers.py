@@ -212,9 +212,9 @@ def test_pi_saturation_two_steps_and_reset() -> None:
 
 def test_pi_saturation_history_window_forgets_old_speeds() -> None:
     # v_catch=0, no leader: alpha = 1, beta = 0.5, v_cmd = 0.5*U + 0.5*v_cmd_prev.
-    # speeds 1,2,3,4 with a 0.3 s window at dt = 0.1 (3 samples):
+    # speeds 1,2,3,4 with a 0.4 s window at dt = 0.1 (Flow keeps int(0.4/0.1) - 1 = 3 samples):
     # U = 1, 1.5, 2, mean(2,3,4) = 3 -> v_cmd = 0.5, 1.0, 1.5, 2.25 (2.0 without the window)
-    ctrl = PISaturation(v_catch=0, history_time=0.3)
+    ctrl = PISaturation(v_catch=0, history_time=0.4)
     ctrl.reset(1)
     for v in (1.0, 2.0, 3.0, 4.0):
         accel(ctrl, make_inputs([v], [INF], dt=0.1))

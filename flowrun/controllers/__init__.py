@@ -1,13 +1,17 @@
 """Controllers: pure, vectorised formulas that turn vehicle state into commands.
 
 Flow-compatible names: ``from flowrun.controllers import IDMController, ContinuousRouter,
-RLController``.
+RLController``, and Flow's module paths (``flowrun.controllers.car_following_models``,
+``.velocity_controllers``, ``.routing_controllers``, ``.lane_change_controllers``,
+``.base_controller``, ``.rlcontroller``). :class:`VehicleControllerView` is one vehicle's
+controller with Flow's ``get_action(env)``.
 """
 
 from flowrun.controllers.base import (
     AccelerationController,
     CarFollowingInputs,
     make_inputs,
+    vehicle_limits,
 )
 from flowrun.controllers.car_following import (
     BandoFTLController,
@@ -44,6 +48,7 @@ from flowrun.controllers.velocity import (
     follower_stopper_speed,
     pi_saturation_speed,
 )
+from flowrun.controllers.view import VehicleControllerView
 
 #: Flow's base-class names.
 BaseController = AccelerationController
@@ -72,6 +77,7 @@ __all__ = [
     "SimCarFollowingController",
     "SimLaneChangeController",
     "StaticLaneChanger",
+    "VehicleControllerView",
     "bando_ftl_accel",
     "bcm_accel",
     "build_controller",
@@ -87,4 +93,5 @@ __all__ = [
     "ovm_accel",
     "pi_saturation_speed",
     "resolve_controller",
+    "vehicle_limits",
 ]

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import ClassVar
+from dataclasses import dataclass, replace
+from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -72,6 +72,28 @@ class CarFollowingInputs:
 #: SUMO's default ``accel`` of a passenger car, m/s^2 (Flow's ``SumoCarFollowingParams``).
 DEFAULT_MAX_ACCEL = 2.6
 
+#: Flow's default ``decel`` of ``SumoCarFollowingParams``, m/s^2.
+DEFAULT_MAX_DECEL = 7.5
+
+
+def vehicle_limits(car_following_params: Any) -> tuple[float, float] | None:
+    """``(accel, decel)`` (m/s^2, decel positive) of a vehicle type's car-following params.
+
+    Reads Flow's ``controller_params['accel'/'decel']`` when present, else the ``accel`` and
+    ``decel`` attributes (flowrun's :class:`~flowrun.config.params.SumoCarFollowingParams`).
+    ``None`` when ``car_following_params`` is ``None`` or has neither.
+    """
+    if car_following_params is None:
+        return None
+    table = getattr(car_following_params, "controller_params", None)
+    if isinstance(table, dict) and "accel" in table and "decel" in table:
+        return float(table["accel"]), abs(float(table["decel"]))
+    accel = getattr(car_following_params, "accel", None)
+    decel = getattr(car_following_params, "decel", None)
+    if accel is None or decel is None:
+        return None
+    return float(accel), abs(float(decel))
+
 
 def make_inputs(
     speed: Sequence[float] | FloatArray,
@@ -127,11 +149,19 @@ class AccelerationController:
     acceleration noise, ``sqrt(dt) * N(0, noise)``, drawn from the generator it is given, then
     runs the requested fail-safes (see :mod:`flowrun.controllers.fail_safe`).
 
+    Flow's per-vehicle constructor arguments are accepted too: ``veh_id`` (Flow passes it
+    first, positionally) and ``car_following_params`` (the vehicle type's
+    ``SumoCarFollowingParams``). When the kernel's inputs carry no ``max_accel`` /
+    ``max_decel``, the limits of ``car_following_params`` are used instead.
+
     Args:
         noise: standard deviation of the acceleration noise, m/s^2 per sqrt(s).
         fail_safe: Flow's fail-safe name(s): ``instantaneous``, ``safe_velocity``,
             ``feasible_accel``, ``obey_speed_limit`` (or a list of them), or ``None``.
         time_delay: reaction delay used by the ``safe_velocity`` fail-safe, s.
+        veh_id: Flow's vehicle id (informative: one flowrun controller drives a group).
+        car_following_params: the vehicle type's car-following parameters, or ``None``.
+        display_warnings: accepted for Flow compatibility (flowrun never prints).
 
     Attributes:
         registered_name: the name configs use (``type: IDM``).
@@ -151,11 +181,42 @@ class AccelerationController:
         noise: float = 0.0,
         fail_safe: str | Sequence[str] | None = None,
         time_delay: float = 0.0,
+        *,
+        veh_id: str | None = None,
+        car_following_params: Any = None,
+        display_warnings: bool = True,
     ) -> None:
         me = type(self).__name__
         self.noise = number(me, "noise", noise, low=0)
         self.fail_safe: tuple[str, ...] = check_fail_safe(fail_safe)
         self.time_delay = number(me, "time_delay", time_delay, low=0)
+        if veh_id is not None and not isinstance(veh_id, str):
+            raise ValueError(f"{me}: veh_id must be a vehicle id string, got {veh_id!r}")
+        self.veh_id = veh_id
+        self.car_following_params = car_following_params
+        self.display_warnings = bool(display_warnings)
+        self._limits = vehicle_limits(car_following_params)
+
+    @property
+    def max_accel(self) -> float:
+        """Flow's ``max_accel``: the vehicle type's ``accel`` (m/s^2; 2.6 when unknown)."""
+        return self._limits[0] if self._limits is not None else DEFAULT_MAX_ACCEL
+
+    @property
+    def max_deaccel(self) -> float:
+        """Flow's ``max_deaccel``: the vehicle type's ``decel`` (m/s^2, positive; 7.5 unknown)."""
+        return self._limits[1] if self._limits is not None else DEFAULT_MAX_DECEL
+
+    def with_limits(self, inputs: CarFollowingInputs) -> CarFollowingInputs:
+        """``inputs`` with this controller's vehicle limits filled in where the kernel gave none."""
+        if self._limits is None or (inputs.max_accel is not None and inputs.max_decel is not None):
+            return inputs
+        n = inputs.size
+        return replace(
+            inputs,
+            max_accel=np.full(n, self._limits[0]) if inputs.max_accel is None else inputs.max_accel,
+            max_decel=np.full(n, self._limits[1]) if inputs.max_decel is None else inputs.max_decel,
+        )
 
     def reset(self, num_vehicles: int) -> None:
         """Forget any per-vehicle memory; called at every environment reset."""
@@ -165,6 +226,8 @@ class AccelerationController:
 
         ``nan`` entries mean "no command this step" (leave the vehicle to SUMO / the agent).
         """
+        if inputs.max_accel is None or inputs.max_decel is None:
+            inputs = self.with_limits(inputs)
         accel = np.asarray(self._accel(inputs), dtype=np.float64)
         if self.is_rl or not self.commands_sumo:
             return accel

@@ -6,14 +6,19 @@ bumper-to-bumper gap to the leader in m (``inf`` without a leader), speeds are i
 
 Without a leader, Flow's CFM, BCM and OVM controllers (and Bando-FTL with
 ``want_max_accel=True``) command the vehicle type's maximum acceleration; the classes here do
-the same, using ``inputs.max_accel`` or, when the kernel does not supply it, SUMO's default
+the same, using ``inputs.max_accel`` (the vehicle type's ``accel``, filled by the kernel or
+from the controller's ``car_following_params``) or, when neither is known, SUMO's default
 2.6 m/s^2.
+
+The constructors take Flow's leading ``veh_id`` (and ``car_following_params`` where Flow
+has it), so ``IDMController("human_0", car_following_params=...)`` works as in Flow.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -225,6 +230,7 @@ class IDMController(AccelerationController):
 
     def __init__(
         self,
+        veh_id: str | None = None,
         v0: float = 30,
         T: float = 1,
         a: float = 1,
@@ -234,8 +240,13 @@ class IDMController(AccelerationController):
         time_delay: float = 0.0,
         noise: float = 0,
         fail_safe: str | Sequence[str] | None = None,
+        display_warnings: bool = True,
+        car_following_params: Any = None,
     ) -> None:
-        super().__init__(noise=noise, fail_safe=fail_safe, time_delay=time_delay)
+        super().__init__(
+            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
+            car_following_params=car_following_params, display_warnings=display_warnings,
+        )  # fmt: skip
         me = type(self).__name__
         self.v0 = number(me, "v0", v0, low=0, strict=True, allow_inf=True)
         self.T = number(me, "T", T, low=0)
@@ -258,6 +269,8 @@ class CFMController(AccelerationController):
 
     def __init__(
         self,
+        veh_id: str | None = None,
+        car_following_params: Any = None,
         k_d: float = 1,
         k_v: float = 1,
         k_c: float = 1,
@@ -266,8 +279,12 @@ class CFMController(AccelerationController):
         time_delay: float = 0.0,
         noise: float = 0,
         fail_safe: str | Sequence[str] | None = None,
+        display_warnings: bool = True,
     ) -> None:
-        super().__init__(noise=noise, fail_safe=fail_safe, time_delay=time_delay)
+        super().__init__(
+            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
+            car_following_params=car_following_params, display_warnings=display_warnings,
+        )  # fmt: skip
         me = type(self).__name__
         self.k_d = number(me, "k_d", k_d, low=0)
         self.k_v = number(me, "k_v", k_v, low=0)
@@ -305,6 +322,8 @@ class OVMController(AccelerationController):
 
     def __init__(
         self,
+        veh_id: str | None = None,
+        car_following_params: Any = None,
         alpha: float = 1,
         beta: float = 1,
         h_st: float = 2,
@@ -313,8 +332,12 @@ class OVMController(AccelerationController):
         time_delay: float = 0,
         noise: float = 0,
         fail_safe: str | Sequence[str] | None = None,
+        display_warnings: bool = True,
     ) -> None:
-        super().__init__(noise=noise, fail_safe=fail_safe, time_delay=time_delay)
+        super().__init__(
+            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
+            car_following_params=car_following_params, display_warnings=display_warnings,
+        )  # fmt: skip
         me = type(self).__name__
         self.alpha = number(me, "alpha", alpha, low=0)
         self.beta = number(me, "beta", beta, low=0)
@@ -337,14 +360,20 @@ class LinearOVM(AccelerationController):
 
     def __init__(
         self,
+        veh_id: str | None = None,
+        car_following_params: Any = None,
         v_max: float = 30,
         adaptation: float = 0.65,
         h_st: float = 5,
         time_delay: float = 0.0,
         noise: float = 0,
         fail_safe: str | Sequence[str] | None = None,
+        display_warnings: bool = True,
     ) -> None:
-        super().__init__(noise=noise, fail_safe=fail_safe, time_delay=time_delay)
+        super().__init__(
+            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
+            car_following_params=car_following_params, display_warnings=display_warnings,
+        )  # fmt: skip
         me = type(self).__name__
         self.v_max = number(me, "v_max", v_max, low=0)
         self.adaptation = number(me, "adaptation", adaptation, low=0, strict=True)
@@ -367,6 +396,8 @@ class BandoFTLController(AccelerationController):
 
     def __init__(
         self,
+        veh_id: str | None = None,
+        car_following_params: Any = None,
         alpha: float = 0.5,
         beta: float = 20,
         h_st: float = 2,
@@ -376,8 +407,12 @@ class BandoFTLController(AccelerationController):
         time_delay: float = 0,
         noise: float = 0,
         fail_safe: str | Sequence[str] | None = None,
+        display_warnings: bool = True,
     ) -> None:
-        super().__init__(noise=noise, fail_safe=fail_safe, time_delay=time_delay)
+        super().__init__(
+            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
+            car_following_params=car_following_params, display_warnings=display_warnings,
+        )  # fmt: skip
         me = type(self).__name__
         self.alpha = number(me, "alpha", alpha, low=0)
         self.beta = number(me, "beta", beta, low=0)
@@ -403,6 +438,8 @@ class GippsController(AccelerationController):
 
     def __init__(
         self,
+        veh_id: str | None = None,
+        car_following_params: Any = None,
         v0: float = 30,
         acc: float = 1.5,
         b: float = -1,
@@ -412,8 +449,12 @@ class GippsController(AccelerationController):
         delay: float = 0,
         noise: float = 0,
         fail_safe: str | Sequence[str] | None = None,
+        display_warnings: bool = True,
     ) -> None:
-        super().__init__(noise=noise, fail_safe=fail_safe, time_delay=delay)
+        super().__init__(
+            noise=noise, fail_safe=fail_safe, time_delay=delay, veh_id=veh_id,
+            car_following_params=car_following_params, display_warnings=display_warnings,
+        )  # fmt: skip
         me = type(self).__name__
         self.v0 = number(me, "v0", v0, low=0, strict=True)
         self.acc = number(me, "acc", acc, low=0, strict=True)

@@ -70,8 +70,12 @@ def safe_velocity(
 def obey_speed_limit(
     accel: FloatArray, v: FloatArray, speed_limit: FloatArray, dt: float
 ) -> FloatArray:
-    """Keep the next speed ``v + a*dt`` at or below the lane's speed limit (m/s)."""
-    return np.where(v + accel * dt > speed_limit, (speed_limit - v) / dt, accel)
+    """Keep the next speed ``v + a*dt`` at or below the lane's speed limit (m/s).
+
+    Above it, return ``(limit - v)/dt``; a limit ``<= 0`` stops the car: ``-v/dt`` (Flow).
+    """
+    capped = np.where(speed_limit > 0, (speed_limit - v) / dt, -v / dt)
+    return np.where(v + accel * dt > speed_limit, capped, accel)
 
 
 def feasible_accel(

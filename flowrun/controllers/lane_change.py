@@ -7,7 +7,7 @@ keep the lane, or ``None`` for the whole group when SUMO's own lane-change model
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -18,6 +18,10 @@ IntArray = npt.NDArray[np.int_]
 class LaneChangeController:
     """Base of lane-change controllers (one instance per vehicle group).
 
+    Args:
+        veh_id: Flow's vehicle id (Flow passes it first; informative here).
+        lane_change_params: the vehicle type's ``SumoLaneChangeParams`` (kept as given).
+
     Attributes:
         registered_name: the name configs use (``type: StaticLaneChanger``).
         commands_sumo: ``False`` when SUMO's lane-change model decides.
@@ -27,8 +31,9 @@ class LaneChangeController:
     aliases: ClassVar[tuple[str, ...]] = ()
     commands_sumo: ClassVar[bool] = True
 
-    def __init__(self) -> None:
-        pass
+    def __init__(self, veh_id: str | None = None, lane_change_params: Any = None) -> None:
+        self.veh_id = veh_id
+        self.lane_change_params = lane_change_params
 
     def get_lane_change(self, num_vehicles: int) -> IntArray | None:
         """Directions (``+1`` left, ``-1`` right, ``0`` stay), or ``None``: SUMO decides."""

@@ -36,6 +36,12 @@ from flowrun.suggest import did_you_mean, unknown_name
 
 ControllerKind = Literal["acceleration", "routing", "lane_change"]
 
+#: Constructor arguments that exist for Flow's per-vehicle construction
+#: (``IDMController("human_0", car_following_params=...)``); a config never sets them.
+FLOW_ONLY_PARAMS = frozenset(
+    {"veh_id", "car_following_params", "router_params", "lane_change_params", "display_warnings"}
+)
+
 _BASES: tuple[tuple[ControllerKind, type], ...] = (
     ("acceleration", AccelerationController),
     ("routing", Router),
@@ -157,9 +163,17 @@ def resolve_controller(name: str, kind: ControllerKind | None = None) -> type[An
 
 
 def build_controller(
-    name: str, params: Mapping[str, Any] | None = None, kind: ControllerKind | None = None
+    name: str,
+    params: Mapping[str, Any] | None = None,
+    kind: ControllerKind | None = None,
+    *,
+    veh_id: str | None = None,
+    car_following_params: Any = None,
 ) -> Any:
     """Instantiate the controller ``name`` with keyword ``params``.
+
+    ``veh_id`` and ``car_following_params`` are passed on when the constructor takes them
+    and they are given (or the constructor requires them, as a Flow-style user class does).
 
     Raises:
         ConfigError: unknown controller, unknown parameter (with a did-you-mean against the
@@ -172,7 +186,7 @@ def build_controller(
     accepted = [
         p.name
         for p in signature.parameters.values()
-        if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+        if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY) and p.name not in FLOW_ONLY_PARAMS
     ]
     takes_any = any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values())
     if not takes_any:
@@ -184,6 +198,10 @@ def build_controller(
                     f"{did_you_mean(str(key), accepted)}; expected: {expected}",
                     path=str(key),
                 )
+    for extra, value in (("veh_id", veh_id), ("car_following_params", car_following_params)):
+        p = signature.parameters.get(extra)
+        if p is not None and (value is not None or p.default is p.empty):
+            params[extra] = value
     try:
         return cls(**params)
     except (ValueError, TypeError) as exc:

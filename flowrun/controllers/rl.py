@@ -6,6 +6,8 @@ Both return ``nan`` for every vehicle; the kernel must check the class attribute
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from flowrun.controllers.base import AccelerationController, CarFollowingInputs, FloatArray
@@ -22,8 +24,8 @@ class RLController(AccelerationController):
     aliases = ("RL",)
     is_rl = True
 
-    def __init__(self) -> None:
-        super().__init__()
+    def __init__(self, veh_id: str | None = None, car_following_params: Any = None) -> None:
+        super().__init__(veh_id=veh_id, car_following_params=car_following_params)
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         return np.full(inputs.size, np.nan)
@@ -40,8 +42,8 @@ class SimCarFollowingController(AccelerationController):
     aliases = ("SimCarFollowing", "SUMO")
     commands_sumo = False
 
-    def __init__(self) -> None:
-        super().__init__()
+    def __init__(self, veh_id: str | None = None, car_following_params: Any = None) -> None:
+        super().__init__(veh_id=veh_id, car_following_params=car_following_params)
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         return np.full(inputs.size, np.nan)

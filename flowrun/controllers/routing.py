@@ -8,7 +8,7 @@ is on (0 on the route's last edge). Routes on offer for an edge come as Flow's
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -42,6 +42,10 @@ def pick_route(choices: Sequence[RouteChoice], rng: np.random.Generator) -> list
 class Router:
     """Base of routing controllers (one instance per vehicle group).
 
+    Args:
+        veh_id: Flow's vehicle id (Flow passes it first; informative here).
+        router_params: Flow's ``router_params`` dict (kept as given).
+
     Attributes:
         registered_name: the name configs use (``type: ContinuousRouter``).
     """
@@ -49,8 +53,9 @@ class Router:
     registered_name: ClassVar[str] = ""
     aliases: ClassVar[tuple[str, ...]] = ()
 
-    def __init__(self) -> None:
-        pass
+    def __init__(self, veh_id: str | None = None, router_params: Any = None) -> None:
+        self.veh_id = veh_id
+        self.router_params = router_params
 
     def reroute_mask(
         self, edges_left: Sequence[int] | npt.NDArray[np.int_]

@@ -8,6 +8,7 @@ it in one step, ``(v_cmd - v)/dt`` (m/s^2).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -61,21 +62,28 @@ class FollowerStopper(AccelerationController):
     """Stern et al.'s FollowerStopper (see :func:`follower_stopper_speed`).
 
     Args:
+        veh_id: Flow's vehicle id (Flow passes it first).
+        car_following_params: the vehicle type's ``SumoCarFollowingParams`` (its
+            ``accel``/``decel`` cap the command when the kernel gives no limits).
         v_des: desired speed, m/s.
         danger_edges: edges near which Flow hands the car back to SUMO (kept for the
             kernel; the formula itself does not know edges).
         control_length: ``(x_start, x_end)`` in m outside which Flow hands the car to SUMO
             (kept for the kernel, as ``danger_edges``).
         dx_1_0, dx_2_0, dx_3_0: base switching gaps, m. d_1, d_2, d_3: decelerations, m/s^2.
+        noise: acceleration noise, as for every controller.
+        fail_safe: Flow's FollowerStopper always runs ``safe_velocity``; so does the default.
 
-    The command is capped at ``inputs.max_accel`` and ``-inputs.max_decel`` when the kernel
-    supplies them (Flow clips to the vehicle type's accel/decel).
+    The command is clipped to ``[-max_decel, max_accel]``, the vehicle type's limits (Flow
+    clips to the vehicle type's accel/decel), when they are known.
     """
 
     registered_name = "FollowerStopper"
 
     def __init__(
         self,
+        veh_id: str | None = None,
+        car_following_params: Any = None,
         v_des: float = 15,
         danger_edges: Sequence[str] | None = None,
         control_length: Sequence[float] | None = None,
@@ -86,9 +94,13 @@ class FollowerStopper(AccelerationController):
         d_2: float = 1.0,
         d_3: float = 0.5,
         noise: float = 0,
-        fail_safe: str | Sequence[str] | None = None,
+        fail_safe: str | Sequence[str] | None = "safe_velocity",
+        display_warnings: bool = True,
     ) -> None:
-        super().__init__(noise=noise, fail_safe=fail_safe)
+        super().__init__(
+            noise=noise, fail_safe=fail_safe, veh_id=veh_id,
+            car_following_params=car_following_params, display_warnings=display_warnings,
+        )  # fmt: skip
         me = type(self).__name__
         self.v_des = number(me, "v_des", v_des, low=0)
         self.dx_1_0 = number(me, "dx_1_0", dx_1_0, low=0)
@@ -149,10 +161,17 @@ class PISaturation(AccelerationController):
 
     Memory per vehicle: the ego speeds of the last ``history_time`` seconds (their mean is
     the estimate ``U`` of the average traffic speed, as in Flow) and the previous command
-    ``v_cmd`` (starting at 0). :meth:`reset` clears it; a change in the number of vehicles
-    also resets it. The acceleration is capped at ``inputs.max_accel`` when supplied.
+    ``v_cmd`` (starting at 0). Flow keeps ``int(38/dt) - 1`` speeds (it drops the oldest
+    when the list reaches ``int(38/dt)``); so does this class, with ``round`` for ``int``
+    so that a ``history_time/dt`` like ``2.9999999`` counts as 3. :meth:`reset` clears the
+    memory; a change in the number of vehicles also resets it.
+
+    The acceleration is capped at the vehicle type's ``accel`` (``inputs.max_accel``, or the
+    ``car_following_params`` given) as in Flow, which does not cap the deceleration.
 
     Args:
+        veh_id: Flow's vehicle id (Flow passes it first).
+        car_following_params: the vehicle type's ``SumoCarFollowingParams``.
         v_catch: catch-up speed added to ``U`` at large gaps, m/s.
         g_l, g_u: gaps (m) between which the catch-up speed ramps in.
         gamma: gap width (m) over which the controller blends from the leader's speed.
@@ -164,6 +183,8 @@ class PISaturation(AccelerationController):
 
     def __init__(
         self,
+        veh_id: str | None = None,
+        car_following_params: Any = None,
         v_catch: float = 1,
         g_l: float = 7,
         g_u: float = 30,
@@ -171,8 +192,12 @@ class PISaturation(AccelerationController):
         history_time: float = 38,
         noise: float = 0,
         fail_safe: str | Sequence[str] | None = None,
+        display_warnings: bool = True,
     ) -> None:
-        super().__init__(noise=noise, fail_safe=fail_safe)
+        super().__init__(
+            noise=noise, fail_safe=fail_safe, veh_id=veh_id,
+            car_following_params=car_following_params, display_warnings=display_warnings,
+        )  # fmt: skip
         me = type(self).__name__
         self.v_catch = number(me, "v_catch", v_catch, low=0)
         self.g_l = number(me, "g_l", g_l, low=0)
@@ -192,7 +217,7 @@ class PISaturation(AccelerationController):
     def _remember(self, speed: FloatArray, dt: float) -> FloatArray:
         """Add this step's speeds to the ring buffer; return the mean over it (m/s)."""
         if self._history.shape[0] == 0:
-            window = max(1, round(self.history_time / dt))
+            window = max(1, round(self.history_time / dt) - 1)
             self._history = np.zeros((window, self._n))
         self._history[self._next] = speed
         self._next = (self._next + 1) % self._history.shape[0]

@@ -87,12 +87,26 @@ class AccelEnv(RingAccelBase):
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
+    @property
+    def absolute_position(self) -> dict[str, float]:
+        """Flow's ``absolute_position``: each car's start plus distance travelled, modulo the
+        ring length (m) - on a ring that is its position ``get_x_by_id`` taken mod length."""
+        vk = self.k.vehicle
+        length = self.k.network.length()
+        return {veh_id: float(vk.get_x_by_id(veh_id)) % length for veh_id in vk.get_ids()}
+
+    def _get_abs_position(self, veh_id: str) -> float:
+        """Flow's helper: :attr:`absolute_position` of one car (m)."""
+        return float(self.k.vehicle.get_x_by_id(veh_id)) % self.k.network.length()
+
+    @property
     def sorted_ids(self) -> list[str]:
-        """Vehicle ids in observation order."""
+        """Vehicle ids in observation order (Flow's property): by absolute position when
+        ``sort_vehicles`` is set, else as ``get_ids()``."""
         ids = self.k.vehicle.get_ids()
         if self.env_params.additional_params.get("sort_vehicles"):
-            return sorted(ids, key=self.k.vehicle.get_x_by_id)
-        return ids
+            return sorted(ids, key=self._get_abs_position)
+        return list(ids)
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired-velocity reward (mean speed when ``env_params.evaluate``)."""

@@ -72,7 +72,7 @@ class LaneChangeAccelEnv(AccelEnv):
 
     def get_state(self) -> Any:
         """Speeds, positions and lanes, normalised to [0, 1]."""
-        ids = self.sorted_ids()
+        ids = self.sorted_ids
         vk = self.k.vehicle
         lanes = max(self.k.network.num_lanes(e) for e in self.k.network.get_edge_list())
         speed = np.array(vk.get_speed(ids)) / self.k.network.max_speed()

@@ -34,7 +34,7 @@ class WaveAttenuationEnv(RingAccelBase):
     Observation: speeds / max speed and positions / length of all cars (``2 * N`` in [0, 1]).
     Action: acceleration of each RL car in ``[-max_decel, max_accel]`` m/s^2.
     Reward: ``4 * mean(v) / 20 - 4 * mean(|a|)`` (terms in ``info["reward_terms"]``);
-    mean speed in evaluate mode; 0 after a collision.
+    mean speed in evaluate mode; 0 after a collision and when no action is given (warm-up).
     """
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
@@ -69,7 +69,14 @@ class WaveAttenuationEnv(RingAccelBase):
         return self.initial_network.with_params(length=length)
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
-        """Speed reward minus acceleration penalty (mean speed when evaluating)."""
+        """Speed reward minus acceleration penalty (mean speed when evaluating).
+
+        0 when ``rl_actions`` is ``None`` (warm-up steps, or a rollout without a policy),
+        before the evaluate check, as in Flow.
+        """
+        if rl_actions is None:
+            self.reward_terms = {"speed": 0.0, "accel_penalty": 0.0}
+            return 0.0
         speeds = self.k.vehicle.speed
         if self.env_params.evaluate:
             return float(np.mean(speeds))

@@ -1,0 +1,5 @@
+"""Flow's ``flow.controllers.rlcontroller`` import path (flowrun's class)."""
+
+from flowrun.controllers.rl import RLController
+
+__all__ = ["RLController"]

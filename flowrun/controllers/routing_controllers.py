@@ -1,0 +1,5 @@
+"""Flow's ``flow.controllers.routing_controllers`` import path (flowrun's classes)."""
+
+from flowrun.controllers.routing import ContinuousRouter
+
+__all__ = ["ContinuousRouter"]

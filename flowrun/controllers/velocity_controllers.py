@@ -1,0 +1,5 @@
+"""Flow's ``flow.controllers.velocity_controllers`` import path (flowrun's classes)."""
+
+from flowrun.controllers.velocity import FollowerStopper, PISaturation
+
+__all__ = ["FollowerStopper", "PISaturation"]

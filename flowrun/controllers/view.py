@@ -1,0 +1,203 @@
+"""Flow's per-vehicle controller objects, as thin views over flowrun's vectorised controllers.
+
+Flow code asks ``env.k.vehicle.get_acc_controller(veh_id).get_action(env)``. flowrun drives a
+whole vehicle group with one vectorised controller; :class:`VehicleControllerView` binds such
+a controller to one vehicle id and answers Flow's per-vehicle calls by reading that vehicle's
+state through ``env.k.vehicle`` getters (one vehicle, so this path is for Flow code and tests;
+the kernel's own step stays vectorised).
+
+A stateful controller (:class:`~flowrun.controllers.velocity.PISaturation`) gets its own copy
+in the view, so the view's calls never disturb the group's memory; keep one view per vehicle
+to keep its memory from step to step, as Flow keeps one controller per vehicle.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from typing import Any
+
+import numpy as np
+
+from flowrun.controllers.base import (
+    DEFAULT_MAX_ACCEL,
+    DEFAULT_MAX_DECEL,
+    AccelerationController,
+    CarFollowingInputs,
+    vehicle_limits,
+)
+
+#: Distance to the end of its edge (m) within which FollowerStopper gives no command on a
+#: ``danger_edges`` edge (Flow).
+DANGER_DISTANCE = 10.0
+
+
+def _sim_step(env: Any) -> float:
+    """Flow's ``env.sim_step`` (s), or ``env.sim_params.sim_step``."""
+    dt = getattr(env, "sim_step", None)
+    if dt is None:
+        dt = env.sim_params.sim_step
+    return float(dt)
+
+
+def _sim_time(env: Any) -> float:
+    """Simulation time (s) if the env exposes it, else 0."""
+    sim: Any = getattr(getattr(env, "k", None), "simulation", None)
+    time = getattr(sim, "time", None)
+    if time is None and hasattr(sim, "get_time"):
+        time = sim.get_time()
+    try:
+        return float(time) if time is not None else 0.0
+    except (TypeError, ValueError):
+        return 0.0
+
+
+def _speed_limit(env: Any, edge: str) -> float:
+    """Speed limit of ``edge`` (m/s) from ``env.k.network.speed_limit``; ``inf`` if unknown."""
+    network = getattr(env.k, "network", None)
+    if network is None or not hasattr(network, "speed_limit") or not edge:
+        return math.inf
+    try:
+        return float(network.speed_limit(edge))
+    except (KeyError, ValueError, TypeError):
+        return math.inf
+
+
+class VehicleControllerView:
+    """One vehicle's acceleration controller, with Flow's ``BaseController`` interface.
+
+    Args:
+        controller: the vectorised controller of the vehicle's group.
+        veh_id: the vehicle's id.
+        car_following_params: the vehicle type's ``SumoCarFollowingParams``; its ``accel`` /
+            ``decel`` are the limits Flow's controllers use. Defaults to the controller's own
+            ``car_following_params``, then to Flow's defaults (2.6 and 7.5 m/s^2).
+        rng: generator for the acceleration noise; by default ``env.np_random`` when the
+            env has one, else a generator owned by the view.
+
+    Attributes:
+        veh_id: the vehicle's id.
+        controller: the controller the view calls (a private copy for stateful ones).
+        car_following_params: as given (or the controller's).
+        max_accel: the vehicle's maximum acceleration, m/s^2.
+        max_deaccel: the vehicle's maximum deceleration, m/s^2 (positive).
+    """
+
+    def __init__(
+        self,
+        controller: AccelerationController,
+        veh_id: str,
+        car_following_params: Any = None,
+        rng: np.random.Generator | None = None,
+    ) -> None:
+        if controller.stateful:
+            controller = copy.deepcopy(controller)
+            controller.reset(1)
+        self.controller = controller
+        self.veh_id = veh_id
+        self.car_following_params = (
+            car_following_params
+            if car_following_params is not None
+            else controller.car_following_params
+        )
+        limits = vehicle_limits(self.car_following_params)
+        self.max_accel, self.max_deaccel = limits or (DEFAULT_MAX_ACCEL, DEFAULT_MAX_DECEL)
+        self._rng = rng
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({type(self.controller).__name__}, {self.veh_id!r})"
+
+    def __getattr__(self, name: str) -> Any:
+        # Flow code reads controller parameters directly (``v_des``, ``fail_safe``, ...).
+        if name.startswith("__") or name == "controller":
+            raise AttributeError(name)
+        return getattr(self.controller, name)
+
+    @property
+    def sumo_controller(self) -> bool:
+        """Whether SUMO's own model drives the vehicle (Flow's ``uses_sumo``)."""
+        return not self.controller.commands_sumo
+
+    def uses_sumo(self) -> bool:
+        """Flow's name for :attr:`sumo_controller`."""
+        return self.sumo_controller
+
+    def inputs(self, env: Any) -> CarFollowingInputs:
+        """The one-vehicle :class:`CarFollowingInputs` read from ``env.k.vehicle``."""
+        vk = env.k.vehicle
+        v = float(vk.get_speed(self.veh_id))
+        lead = vk.get_leader(self.veh_id)
+        if lead:
+            h, v_lead = float(vk.get_headway(self.veh_id)), float(vk.get_speed(lead))
+        else:
+            h, v_lead = math.inf, v
+        follower = vk.get_follower(self.veh_id)
+        if follower:
+            h_f, v_f = float(vk.get_headway(follower)), float(vk.get_speed(follower))
+        else:
+            h_f, v_f = math.inf, v
+        edge = vk.get_edge(self.veh_id)
+        return CarFollowingInputs(
+            speed=np.array([v]),
+            headway=np.array([h]),
+            leader_speed=np.array([v_lead]),
+            follower_headway=np.array([h_f]),
+            follower_speed=np.array([v_f]),
+            speed_limit=np.array([_speed_limit(env, edge)]),
+            dt=_sim_step(env),
+            time=_sim_time(env),
+            max_accel=np.array([self.max_accel]),
+            max_decel=np.array([self.max_deaccel]),
+        )
+
+    def _generator(self, env: Any) -> np.random.Generator:
+        if self._rng is not None:
+            return self._rng
+        rng = getattr(env, "np_random", None)
+        if isinstance(rng, np.random.Generator):
+            return rng
+        self._rng = np.random.default_rng()
+        return self._rng
+
+    def get_accel(self, env: Any) -> float | None:
+        """The controller's formula alone (no noise, no fail-safe), m/s^2; ``None``: no command.
+
+        As in Flow, a stateful controller advances its memory on every call.
+        """
+        value = float(self.controller._accel(self.inputs(env))[0])
+        return None if math.isnan(value) else value
+
+    def get_action(self, env: Any) -> float | None:
+        """Flow's ``get_action``: the acceleration with noise and fail-safes, m/s^2.
+
+        ``None`` (SUMO drives this step) on no edge or a junction-internal edge (id starting
+        with ``:``), for the RL and SUMO placeholders, and where FollowerStopper hands the
+        car back (near the end of a ``danger_edges`` edge, outside ``control_length``).
+        """
+        edge = env.k.vehicle.get_edge(self.veh_id)
+        if not edge or edge[0] == ":" or self._handed_back(env, edge):
+            return None
+        value = float(self.controller.get_accel(self.inputs(env), self._generator(env))[0])
+        return None if math.isnan(value) else value
+
+    def find_intersection_dist(self, env: Any) -> float:
+        """Distance (m) to the end of the vehicle's edge: Flow's ``-10`` without an edge, 0 on
+        an edge whose id contains ``center``."""
+        edge = env.k.vehicle.get_edge(self.veh_id)
+        if not edge:
+            return -10.0
+        if "center" in edge:
+            return 0.0
+        return float(env.k.network.edge_length(edge)) - float(
+            env.k.vehicle.get_position(self.veh_id)
+        )
+
+    def _handed_back(self, env: Any, edge: str) -> bool:
+        danger = getattr(self.controller, "danger_edges", None)
+        if danger and edge in danger and self.find_intersection_dist(env) <= DANGER_DISTANCE:
+            return True
+        control = getattr(self.controller, "control_length", None)
+        if control:
+            x = float(env.k.vehicle.get_x_by_id(self.veh_id))
+            return bool(x < control[0] or x > control[1])
+        return False
