@@ -6,6 +6,7 @@ subclasses describe their road as a :class:`NetworkSpec` and say where vehicles 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -171,6 +172,8 @@ class Network:
     def resolve_params(cls, given: dict[str, Any]) -> dict[str, Any]:
         """``ADDITIONAL_NET_PARAMS`` overlaid with ``given``; unknown keys are errors."""
         params = dict(cls.ADDITIONAL_NET_PARAMS)
+        if not params:  # a user's network that declares none takes what it is given (Flow)
+            return dict(given)
         for key, value in given.items():
             if key not in params:
                 raise ConfigError(
@@ -199,12 +202,57 @@ class Network:
         )
 
     def build_spec(self) -> NetworkSpec:
-        """Describe the road; subclasses implement."""
-        raise NotImplementedError
+        """Describe the road: from Flow's ``specify_*`` methods unless a subclass overrides
+        this (as flowrun's own networks do).
+
+        Raises:
+            ConfigError: the class implements neither.
+        """
+        if type(self).specify_edges is Network.specify_edges:
+            raise ConfigError(
+                f"network class {type(self).__name__} describes no road: implement Flow's "
+                "specify_nodes / specify_edges / specify_routes (and optionally "
+                "specify_types, specify_connections, specify_edge_starts)"
+            )
+        from flowrun.networks.flow_hooks import spec_from_hooks
+
+        return spec_from_hooks(self)
 
     def start_positions(self, rng: np.random.Generator) -> StartPositions:
-        """Initial position of every vehicle; subclasses implement."""
-        raise NotImplementedError
+        """Initial position of every vehicle: Flow's ``InitialConfig`` placement over the
+        network's edges (subclasses may override)."""
+        from flowrun.networks.placement import place_on_network, vehicle_space
+
+        return place_on_network(self.spec, vehicle_space(self.vehicles), self.initial_config, rng)
+
+    # ------------------------------------------------------------------ Flow's hooks
+    def specify_nodes(self, net_params: NetParams) -> list[dict[str, Any]]:
+        """Flow's hook: ``[{id, x, y[, type, radius]}]``."""
+        return []
+
+    def specify_edges(self, net_params: NetParams) -> list[dict[str, Any]]:
+        """Flow's hook: ``[{id, from, to, length, numLanes, speed | type[, shape, priority]}]``."""
+        return []
+
+    def specify_types(self, net_params: NetParams) -> list[dict[str, Any]]:
+        """Flow's hook: ``[{id, numLanes, speed}]``."""
+        return []
+
+    def specify_connections(self, net_params: NetParams) -> Any:
+        """Flow's hook: ``{node_id: [{from, to, fromLane, toLane}]}`` (or a flat list)."""
+        return None
+
+    def specify_routes(self, net_params: NetParams) -> Mapping[str, Any]:
+        """Flow's hook: ``{start_edge: [edges]}`` or ``{start_edge: [(edges, prob), ...]}``."""
+        return {}
+
+    def specify_edge_starts(self) -> list[tuple[str, float]]:
+        """Flow's hook: ``[(edge, start position along the network, m)]``."""
+        return []
+
+    def specify_internal_edge_starts(self) -> list[tuple[str, float]]:
+        """Flow's hook: ``[(":internal_edge", start, m)]``; unlisted ones are derived."""
+        return []
 
     @property
     def length(self) -> float:

@@ -1,0 +1,159 @@
+"""A network written Flow's way: ``specify_nodes``, ``specify_edges``, ... turned into a spec.
+
+Flow's tutorial on creating networks subclasses ``Network`` and returns plain dicts from
+``specify_nodes(net_params)``, ``specify_edges(net_params)``, ``specify_types(net_params)``,
+``specify_connections(net_params)``, ``specify_routes(net_params)``,
+``specify_edge_starts()`` and ``specify_internal_edge_starts()``. This module reads those
+dicts (Flow's keys: ``numLanes``, ``speed``, ``from``, ``to``, ``fromLane``, ...) into a
+:class:`NetworkSpec`, checking what netconvert would otherwise reject obscurely.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from flowrun.errors import ConfigError
+from flowrun.networks.base import Connection, Edge, NetworkSpec, Node, RouteChoice
+from flowrun.suggest import did_you_mean
+
+
+def spec_from_hooks(network: Any) -> NetworkSpec:
+    """The spec of a network whose class implements Flow's ``specify_*`` methods."""
+    net_params = network.net_params
+    name = type(network).__name__
+    nodes = tuple(_node(n, name) for n in network.specify_nodes(net_params) or ())
+    types = {t["id"]: t for t in network.specify_types(net_params) or ()}
+    node_xy = {n.id: (n.x, n.y) for n in nodes}
+    edges = tuple(_edge(e, types, node_xy, name) for e in network.specify_edges(net_params) or ())
+    edge_ids = {e.id for e in edges}
+    connections = _connections(network.specify_connections(net_params), edge_ids, name)
+    routes, choices = _routes(network.specify_routes(net_params) or {}, edge_ids, name)
+    starts = dict(network.specify_edge_starts() or ())
+    if not starts:  # Flow's default: edges laid end to end in the order given
+        at = 0.0
+        for e in edges:
+            starts[e.id] = at
+            at += e.length
+    starts.update(dict(network.specify_internal_edge_starts() or ()))
+    return NetworkSpec(
+        nodes,
+        edges,
+        routes,
+        starts,
+        float(sum(e.length for e in edges)),
+        connections=connections,
+        route_choices=choices,
+        internal_links=True,
+    )
+
+
+def _node(n: Mapping[str, Any], owner: str) -> Node:
+    try:
+        return Node(
+            str(n["id"]),
+            float(n["x"]),
+            float(n["y"]),
+            str(n.get("type", "priority")),
+            None if n.get("radius") is None else float(n["radius"]),
+        )
+    except KeyError as err:
+        missing = err.args[0]
+        raise ConfigError(f"{owner}.specify_nodes: a node lacks {missing!r}: {dict(n)}") from None
+
+
+def _edge(
+    e: Mapping[str, Any],
+    types: Mapping[str, Mapping[str, Any]],
+    node_xy: Mapping[str, tuple[float, float]],
+    owner: str,
+) -> Edge:
+    where = f"{owner}.specify_edges"
+    for key in ("id", "from", "to"):
+        if key not in e:
+            raise ConfigError(f"{where}: an edge lacks {key!r}: {dict(e)}")
+    for key in ("from", "to"):
+        if e[key] not in node_xy:
+            raise ConfigError(
+                f"{where}: edge {e['id']!r} {key} node {e[key]!r} is not among the nodes"
+                f"{did_you_mean(str(e[key]), node_xy)}"
+            )
+    kind = types.get(e["type"], {}) if "type" in e else {}
+    if "type" in e and e["type"] not in types:
+        raise ConfigError(f"{where}: edge {e['id']!r} has unknown type {e['type']!r}")
+    lanes = e.get("numLanes", kind.get("numLanes", 1))
+    speed = e.get("speed", kind.get("speed", 30.0))
+    shape = tuple((float(x), float(y)) for x, y in e.get("shape") or ())
+    length = e.get("length")
+    if length is None:  # as netconvert measures it: along the shape, node to node
+        points = [node_xy[e["from"]], *shape, node_xy[e["to"]]] if not shape else list(shape)
+        length = sum(math.dist(a, b) for a, b in itertools.pairwise(points))
+    return Edge(
+        str(e["id"]),
+        str(e["from"]),
+        str(e["to"]),
+        float(length),
+        int(lanes),
+        float(speed),
+        shape,
+        int(e.get("priority", 78)),
+    )
+
+
+def _connections(given: Any, edges: set[str], owner: str) -> tuple[Connection, ...]:
+    if not given:
+        return ()
+    items: Sequence[Mapping[str, Any]]
+    if isinstance(given, Mapping):
+        items = [c for conns in given.values() for c in conns]
+    else:
+        items = list(given)
+    out = []
+    for c in items:
+        for key in ("from", "to"):
+            if c.get(key) not in edges:
+                raise ConfigError(
+                    f"{owner}.specify_connections: {key} edge {c.get(key)!r} is not an edge"
+                    f"{did_you_mean(str(c.get(key)), edges)}"
+                )
+        out.append(
+            Connection(str(c["from"]), str(c["to"]), int(c.get("fromLane", 0)),
+                       int(c.get("toLane", 0)))
+        )
+    return tuple(out)
+
+
+def _routes(
+    given: Mapping[str, Any], edges: set[str], owner: str
+) -> tuple[dict[str, tuple[str, ...]], dict[str, tuple[RouteChoice, ...]]]:
+    routes: dict[str, tuple[str, ...]] = {}
+    choices: dict[str, tuple[RouteChoice, ...]] = {}
+    where = f"{owner}.specify_routes"
+    for start, value in given.items():
+        if start not in edges:
+            raise ConfigError(
+                f"{where}: {start!r} is not an edge{did_you_mean(str(start), edges)} (routes "
+                "per vehicle id are not supported: key each route by the edge it starts on)"
+            )
+        items = list(value)
+        if all(isinstance(x, str) for x in items):
+            options: list[RouteChoice] = [(tuple(items), 1.0)]
+        else:
+            options = [(tuple(route), float(p)) for route, p in items]
+        total = sum(p for _, p in options)
+        if abs(total - 1.0) > 1e-6:
+            raise ConfigError(f"{where}: route probabilities of {start!r} sum to {total:g}, "
+                              "expected 1")  # fmt: skip
+        for route, _ in options:
+            unknown = [e for e in route if e not in edges]
+            if unknown or route[0] != start:
+                raise ConfigError(
+                    f"{where}: route {list(route)} of {start!r} must start on it and use "
+                    f"existing edges (unknown: {unknown})"
+                )
+        routes[start] = max(options, key=lambda o: o[1])[0]
+        if len(options) > 1:
+            choices[start] = tuple(options)
+    return routes, choices
