@@ -303,3 +303,20 @@ def test_osm_file_netconvert_rejects_gives_one_message_naming_it(tmp_path: Path)
     assert "\n" not in str(err.value)
     with pytest.raises(ConfigError, match=r"missing\.osm' not found"):
         make(TemplateNetwork, osm=str(tmp_path / "missing.osm"))
+
+
+def test_list_networks_shows_each_type_with_its_parameters() -> None:
+    from typer.testing import CliRunner
+
+    from flowrun.cli.main import app
+
+    result = CliRunner().invoke(app, ["list", "networks"])
+    assert result.exit_code == 0, result.output
+    lines = {line.split()[0]: line for line in result.stdout.splitlines()}
+    assert set(lines) == {"ring", "figure_eight", "merge", "highway", "template"}
+    assert "radius_ring=30" in lines["figure_eight"]
+    assert (
+        "use_ghost_edge=false" in lines["highway"]
+        and "boundary_cell_length=500" in lines["highway"]
+    )
+    assert "MergeNetwork" in lines["merge"] and "pre_merge_length=200" in lines["merge"]

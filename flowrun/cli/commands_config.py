@@ -16,7 +16,7 @@ from flowrun.suggest import unknown_name
 # ``flowrun list WHAT`` -> (module, function returning the names); imported only when asked.
 LISTS: dict[str, tuple[str, str]] = {
     "envs": ("flowrun.envs.registry", "env_names"),
-    "networks": ("flowrun.networks.registry", "network_names"),
+    "networks": ("flowrun.networks.registry", "network_lines"),  # with their parameters
     "controllers": ("flowrun.controllers.registry", "controller_names"),
 }
 

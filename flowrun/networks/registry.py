@@ -63,6 +63,29 @@ def network_table() -> list[tuple[str, str, dict[str, Any]]]:
     ]
 
 
+def network_lines() -> list[str]:
+    """``flowrun list networks``: one line per type: name, Flow class, parameters = defaults."""
+    rows = network_table()
+    width = max(len(name) for name, _, _ in rows)
+    cls_width = max(len(cls) for _, cls, _ in rows)
+    lines = []
+    for name, cls, params in rows:
+        note = getattr(NETWORKS[name], "LIST_NOTE", "")
+        values = " ".join(f"{key}={_yaml_scalar(value)}" for key, value in params.items())
+        lines.append(
+            f"{name:<{width}}  {cls:<{cls_width}}  {values}" + (f"  ({note})" if note else "")
+        )
+    return lines
+
+
+def _yaml_scalar(value: Any) -> str:
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
+
+
 def validate_network(
     network_type: str, params: dict[str, Any], vehicles: VehicleParams, initial: InitialConfig
 ) -> None:

@@ -198,6 +198,7 @@ class TemplateNetwork(Network):
 
     ADDITIONAL_NET_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_NET_PARAMS
     network_type: ClassVar[str] = "template"
+    LIST_NOTE: ClassVar[str] = "with template: file.net.xml or osm_path: file.osm"
 
     @classmethod
     def resolve_params(cls, given: dict[str, Any]) -> dict[str, Any]:
