@@ -42,3 +42,23 @@ def test_lane_change_directions_other_than_minus_one_zero_one_are_refused() -> N
         env.k.vehicle.apply_lane_change(vid, 1)  # accepted (one lane: nothing to do)
     finally:
         env.close()
+
+
+def test_a_vehicles_flow_controller_gives_the_groups_vectorised_acceleration() -> None:
+    env = make_env(load("sugiyama"))
+    try:
+        env.reset(seed=0)
+        for _ in range(50):
+            env.step(None)
+        vk = env.k.vehicle
+        control = env.controls[0]
+        expected = control.controller.get_accel(vk.inputs(control.sl, 0.0), env._ctrl_rng)
+        for i in (0, 7, 21):
+            vid = vk.get_ids()[i]
+            ctrl = vk.get_acc_controller(vid)
+            assert ctrl.veh_id == vid
+            assert ctrl.get_action(env) == pytest.approx(expected[i], abs=1e-9)
+        assert vk.get_routing_controller(vid).registered_name == "ContinuousRouter"
+        assert vk.get_lane_changing_controller(vid).commands_sumo is False
+    finally:
+        env.close()

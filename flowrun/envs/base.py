@@ -25,7 +25,12 @@ import numpy as np
 from flowrun.config.params import EnvParams, SumoParams
 from flowrun.envs.frames import StepRecord, complete_frames, step_record
 from flowrun.envs.render import render_ring
-from flowrun.envs.vehicles import GroupControl, build_controllers, build_table
+from flowrun.envs.vehicles import (
+    FlowControllers,
+    GroupControl,
+    build_controllers,
+    build_table,
+)
 from flowrun.errors import ConfigError
 from flowrun.kernel import Kernel
 from flowrun.kernel.geometry import RingPlacement
@@ -187,6 +192,7 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
             read_xy=self.read_xy or (self.record_frames and not closed),
             rng=route_rng,
         )
+        self.k.vehicle.controllers = FlowControllers(self.network.vehicles, self.controls)
         deferred = self.record_frames and closed and not self.read_xy
         self._placement = self.k.vehicle.placement() if deferred else None
         for control in self.controls:

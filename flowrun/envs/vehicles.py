@@ -10,6 +10,7 @@ import numpy as np
 from flowrun.config.params import LANE_CHANGE_MODES, SPEED_MODES, VehicleParams
 from flowrun.controllers.base import AccelerationController
 from flowrun.controllers.registry import build_controller, resolve_controller
+from flowrun.controllers.view import VehicleControllerView
 from flowrun.errors import ConfigError
 from flowrun.kernel.population import Population, VehicleClass, VehicleTable
 from flowrun.networks.base import NetworkSpec, StartPositions
@@ -143,3 +144,45 @@ def _draw_route(spec: NetworkSpec, edge: str, rng: np.random.Generator) -> str |
         return None
     probs = np.array([p for _, p in choices], dtype=np.float64)
     return route_name(edge, int(rng.choice(len(choices), p=probs / probs.sum())))
+
+
+class FlowControllers:
+    """Flow's per-vehicle controller objects (``k.vehicle.get_acc_controller(id)`` and co.).
+
+    Acceleration controllers are per-vehicle views over the group's vectorised controller
+    (kept per vehicle, so a stateful one keeps its memory between calls); lane-change and
+    routing controllers are one object per group, as flowrun runs them.
+    """
+
+    def __init__(self, vehicles: VehicleParams, controls: list[GroupControl]) -> None:
+        self._vehicles = vehicles
+        self._controls = controls
+        self._views: dict[str, VehicleControllerView] = {}
+        self._lane: dict[int, Any] = {}
+        self._route: dict[int, Any] = {}
+
+    def acceleration(self, veh_id: str, group: int) -> VehicleControllerView:
+        """The vehicle's acceleration controller with Flow's ``get_action(env)``."""
+        if veh_id not in self._views:
+            g = self._vehicles.groups[group]
+            self._views[veh_id] = VehicleControllerView(
+                self._controls[group].controller, veh_id,
+                car_following_params=g.car_following_params,
+            )  # fmt: skip
+        return self._views[veh_id]
+
+    def lane_changing(self, group: int) -> Any:
+        """The group's lane-change controller."""
+        if group not in self._lane:
+            spec = self._vehicles.groups[group].lane_change_controller
+            self._lane[group] = build_controller(spec.type, dict(spec.params))
+        return self._lane[group]
+
+    def routing(self, group: int) -> Any:
+        """The group's routing controller (``None`` without one)."""
+        if group not in self._route:
+            spec = self._vehicles.groups[group].routing_controller
+            self._route[group] = None if spec is None else build_controller(
+                spec.type, dict(spec.params)
+            )
+        return self._route[group]

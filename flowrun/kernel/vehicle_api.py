@@ -48,6 +48,8 @@ class FlowVehicleGetters:
     _flow_counts: deque[tuple[int, int]]
     _leader_ids: tuple[np.ndarray | None, list[str]]
     _observed: dict[str, None]
+    #: set by the environment: Flow's per-vehicle controller objects
+    controllers: Any = None
     _edges_cache: list[str] | None
     _stale_edges: bool
 
@@ -93,6 +95,27 @@ class FlowVehicleGetters:
     def get_controlled_lc_ids(self) -> list[str]:
         """Ids of vehicles whose lane changes a flowrun lane-change controller decides."""
         return [self.table.ids[i] for i in np.flatnonzero(self.table.lane_controlled)]
+
+    # ------------------------------------------------------------------ controllers
+    def get_acc_controller(self, veh_id: str) -> Any:
+        """The vehicle's acceleration controller (Flow's ``get_action(env)`` interface)."""
+        return self._require_controllers().acceleration(veh_id, self._group_of(veh_id))
+
+    def get_lane_changing_controller(self, veh_id: str) -> Any:
+        """The lane-change controller of the vehicle's group."""
+        return self._require_controllers().lane_changing(self._group_of(veh_id))
+
+    def get_routing_controller(self, veh_id: str) -> Any:
+        """The routing controller of the vehicle's group (``None`` without one)."""
+        return self._require_controllers().routing(self._group_of(veh_id))
+
+    def _group_of(self, veh_id: str) -> int:
+        return int(self.table.group[self.table.row(veh_id)])
+
+    def _require_controllers(self) -> Any:
+        if self.controllers is None:
+            raise RuntimeError("controllers are known once an environment has reset")
+        return self.controllers
 
     # ------------------------------------------------------------------ Flow's extras
     def get_observed_ids(self) -> list[str]:
