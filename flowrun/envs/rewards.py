@@ -43,3 +43,38 @@ def wave_attenuation_terms(
         mean_abs = float(actions.sum()) / actions.size
         penalty = -4.0 * mean_abs if mean_abs > 0 else 0.0
     return {"speed": speed_term, "accel_penalty": penalty}
+
+
+def min_delay_terms(speeds: FloatArray, v_top: float, dt: float) -> tuple[float, float]:
+    """Flow's delay cost and its maximum: ``dt * sum((v_top - v) / v_top)`` and ``dt * n``.
+
+    Speeds below ``-1e-6`` m/s (Flow's marker of a car not in the network) are left out.
+
+    Args:
+        speeds: vehicle speeds, m/s.
+        v_top: largest speed limit of the network, m/s.
+        dt: simulation step, s.
+
+    Returns:
+        ``(cost, max_cost)``, both in s.
+    """
+    vel = speeds[speeds >= -1e-6]
+    return dt * float(np.sum((v_top - vel) / v_top)), dt * vel.size
+
+
+#: Vehicle constants of Flow's ``energy_consumption``: mass (kg), gravity (m/s^2), rolling
+#: resistance and drag coefficients, air density (kg/m^3), frontal area (m^2).
+MASS, GRAVITY, C_ROLL, C_DRAG, AIR_DENSITY, FRONT_AREA = 1200.0, 9.81, 0.005, 0.3, 1.225, 2.6
+
+
+def power_demand(speeds: FloatArray, previous_speeds: FloatArray, dt: float) -> FloatArray:
+    """Flow's lower bound of each vehicle's power demand, W.
+
+    ``M*v*|v - v_prev|/dt + M*g*C_r*v + 0.5*rho*A*C_a*v^3`` (speeds in m/s, ``dt`` in s).
+    """
+    accel = np.abs(speeds - previous_speeds) / dt
+    return (
+        MASS * speeds * accel
+        + MASS * GRAVITY * C_ROLL * speeds
+        + 0.5 * AIR_DENSITY * FRONT_AREA * C_DRAG * speeds**3
+    )
