@@ -54,6 +54,10 @@ class VehicleClass:
     lane_change_mode: int = 512
 
 
+#: vehicles of a SUMO vType that no vehicle group declares
+FOREIGN = VehicleClass("<sumo>", speed_mode=31, lane_change_mode=1621)
+
+
 @dataclass(frozen=True)
 class VehicleTable:
     """The vehicles of an episode's start, in placement order, and every group's facts.
@@ -94,8 +98,11 @@ class Population:
     """
 
     def __init__(self, classes: Sequence[VehicleClass]) -> None:
-        self.classes = tuple(classes)
-        self._by_name = {c.name: i for i, c in enumerate(self.classes)}
+        # the last class stands for vehicles of a vType no group declares (a template's own
+        # route file): SUMO drives them, nobody commands them
+        self.classes = (*classes, FOREIGN)
+        self._by_name = {c.name: i for i, c in enumerate(classes)}
+        self.foreign = len(classes)
         cls = self.classes
         self._c_rl = np.array([c.is_rl for c in cls], dtype=bool)
         self._c_cmd = np.array([c.commanded for c in cls], dtype=bool)
@@ -117,8 +124,8 @@ class Population:
 
     # ------------------------------------------------------------------ changes
     def class_index(self, type_name: str) -> int:
-        """Index of the group whose SUMO vType is ``type_name`` (-1 for a foreign type)."""
-        return self._by_name.get(type_name, -1)
+        """Index of the group whose SUMO vType is ``type_name`` (:attr:`foreign` if none)."""
+        return self._by_name.get(type_name, self.foreign)
 
     def add(self, ids: Sequence[str], groups: Iterable[int]) -> None:
         """Vehicles that entered the network (appended in the given order)."""

@@ -345,9 +345,9 @@ class VehicleKernel(FlowVehicleGetters):
         pop.remove(arrived)
         v = self.api.vehicle
         groups = [pop.class_index(v.getTypeID(vid)) for vid in departed]
-        pop.add(departed, [max(g, 0) for g in groups])
+        pop.add(departed, groups)
         for vid, g in zip(departed, groups, strict=True):
-            if g >= 0:  # Flow's modes hold from a car's first step
+            if g != pop.foreign:  # Flow's modes hold from a car's first step
                 c = pop.classes[g]
                 v.setSpeedMode(vid, c.speed_mode)
                 v.setLaneChangeMode(vid, c.lane_change_mode)
