@@ -18,9 +18,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from flowrun.errors import ConfigError
-from flowrun.networks.base import Connection, Edge, Network, NetworkSpec, Node, StartPositions
+from flowrun.networks.base import Connection, Edge, Network, NetworkSpec, Node
 from flowrun.networks.checks import check_values
-from flowrun.networks.placement import place_on_network, vehicle_space
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # radius of the circular parts, m (also half the length of each straight road)
@@ -153,10 +152,6 @@ class FigureEightNetwork(Network):
             float(p["radius_ring"]), int(p["lanes"]), float(p["speed_limit"]),
             int(p["resolution"]),
         )  # fmt: skip
-
-    def start_positions(self, rng: np.random.Generator) -> StartPositions:
-        """Flow's initial placement over the six edges (see :func:`place_on_network`)."""
-        return place_on_network(self.spec, vehicle_space(self.vehicles), self.initial_config, rng)
 
 
 #: Flow's older names of the figure eight.

@@ -12,9 +12,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from flowrun.networks.base import Edge, Network, NetworkSpec, Node, StartPositions
+from flowrun.networks.base import Edge, Network, NetworkSpec, Node
 from flowrun.networks.checks import check_values
-from flowrun.networks.placement import place_on_network, vehicle_space
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # length of the highway (without the ghost edge), m
@@ -110,10 +109,6 @@ class HighwayNetwork(Network):
             bool(p["use_ghost_edge"]), float(p["ghost_speed_limit"]),
             float(p["boundary_cell_length"]),
         )  # fmt: skip
-
-    def start_positions(self, rng: np.random.Generator) -> StartPositions:
-        """Flow's initial placement over the highway edges (not the ghost edge)."""
-        return place_on_network(self.spec, vehicle_space(self.vehicles), self.initial_config, rng)
 
 
 #: Flow's older name of the highway.

@@ -12,11 +12,8 @@ from __future__ import annotations
 import math
 from typing import Any, ClassVar
 
-import numpy as np
-
-from flowrun.networks.base import Edge, Network, NetworkSpec, Node, StartPositions
+from flowrun.networks.base import Edge, Network, NetworkSpec, Node
 from flowrun.networks.checks import check_values
-from flowrun.networks.placement import place_on_network, vehicle_space
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # length of the ramp edge `bottom` that joins the highway, m
@@ -134,10 +131,6 @@ class MergeNetwork(Network):
             float(p["post_merge_length"]), int(p["merge_lanes"]), int(p["highway_lanes"]),
             float(p["speed_limit"]),
         )  # fmt: skip
-
-    def start_positions(self, rng: np.random.Generator) -> StartPositions:
-        """Flow's initial placement (usually no vehicles: all come from inflows)."""
-        return place_on_network(self.spec, vehicle_space(self.vehicles), self.initial_config, rng)
 
 
 #: Flow's older name of the merge.

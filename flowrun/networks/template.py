@@ -19,12 +19,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar
 
-import numpy as np
-
 from flowrun.errors import ConfigError
-from flowrun.networks.base import Edge, Network, NetworkSpec, Node, RouteChoice, StartPositions
+from flowrun.networks.base import Edge, Network, NetworkSpec, Node, RouteChoice
 from flowrun.networks.build import check_net_file, sumo_binary
-from flowrun.networks.placement import place_on_network, vehicle_space
 from flowrun.suggest import did_you_mean
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
@@ -243,7 +240,3 @@ class TemplateNetwork(Network):
     def specify_routes(self, net_params: Any) -> Mapping[str, Any]:
         """Flow's hook: start edge -> route (or route choices); default the ``routes`` param."""
         return self.params.get("routes") or {}
-
-    def start_positions(self, rng: np.random.Generator) -> StartPositions:
-        """Flow's initial placement over the network's edges (see :func:`place_on_network`)."""
-        return place_on_network(self.spec, vehicle_space(self.vehicles), self.initial_config, rng)
