@@ -66,7 +66,10 @@ class Kernel:
         self.net_file = build_network(spec, self.work_dir, name=network.network_type or "network")
         routes = self.work_dir / f"{self.net_file.stem.removesuffix('.net')}.rou.xml"
         routes.write_text(routes_xml(spec, network.vehicles, network.net_params.inflows))
-        self.process = SumoProcess(SumoFiles(self.net_file, routes), self.sim_params, self.gui)
+        extra = tuple(Path(f) for f in spec.extra_files)  # a template's own vTypes and routes
+        self.process = SumoProcess(
+            SumoFiles(self.net_file, routes, extra), self.sim_params, self.gui
+        )
         api = self.process.start()
         try:
             self._insert(api, table)

@@ -30,6 +30,7 @@ class SumoFiles:
 
     net: Path
     routes: Path
+    extra_routes: tuple[Path, ...] = ()
 
 
 def sumo_command(files: SumoFiles, params: SumoParams, gui: bool) -> list[str]:
@@ -44,7 +45,7 @@ def sumo_command(files: SumoFiles, params: SumoParams, gui: bool) -> list[str]:
         "--net-file",
         str(files.net),
         "--route-files",
-        str(files.routes),
+        ",".join(str(f) for f in (*files.extra_routes, files.routes)),
         "--step-length",
         repr(float(params.sim_step)),
         "--seed",

@@ -208,6 +208,13 @@ class Network:
         Raises:
             ConfigError: the class implements neither.
         """
+        np_ = self.net_params
+        if type(self).specify_edges is Network.specify_edges and (
+            np_.template is not None or np_.osm_path is not None
+        ):  # Flow's way of using a template: only specify_routes is written
+            from flowrun.networks.template import TemplateNetwork
+
+            return TemplateNetwork.build_spec(self)  # type: ignore[arg-type]
         if type(self).specify_edges is Network.specify_edges:
             raise ConfigError(
                 f"network class {type(self).__name__} describes no road: implement Flow's "
