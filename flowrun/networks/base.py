@@ -6,6 +6,7 @@ subclasses describe their road as a :class:`NetworkSpec` and say where vehicles 
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -230,7 +231,37 @@ class Network:
         network's edges (subclasses may override)."""
         from flowrun.networks.placement import place_on_network, vehicle_space
 
+        if self.initial_config.spacing == "custom":
+            return self.custom_start_positions()
         return place_on_network(self.spec, vehicle_space(self.vehicles), self.initial_config, rng)
+
+    def custom_start_positions(self) -> StartPositions:
+        """Flow's ``spacing="custom"``: the network's own ``gen_custom_start_pos``.
+
+        Flow declares it ``gen_custom_start_pos(cls, net_params, initial_config, num_vehicles)``
+        (a static method taking the class) and expects ``([(edge, pos), ...], [lane, ...])``.
+
+        Raises:
+            ConfigError: the network defines no ``gen_custom_start_pos``.
+        """
+        cls = type(self)
+        raw = inspect.getattr_static(cls, "gen_custom_start_pos", None)
+        if raw is None:
+            raise ConfigError(
+                f"initial.spacing 'custom' asks {cls.__name__}.gen_custom_start_pos for the "
+                "positions, but the network defines none; use 'uniform' or 'random'",
+                path="spacing",
+            )
+        n = self.vehicles.num_vehicles
+        args = (self.net_params, self.initial_config, n)
+        if isinstance(raw, staticmethod):
+            fn = raw.__func__
+            got = fn(cls, *args) if len(inspect.signature(fn).parameters) == 4 else fn(*args)
+        else:
+            got = getattr(self, "gen_custom_start_pos")(*args)  # noqa: B009
+        positions, lanes = got
+        edges = [str(e) for e, _ in positions]
+        return StartPositions(edges, [float(x) for _, x in positions], [int(x) for x in lanes])
 
     # ------------------------------------------------------------------ Flow's hooks
     def specify_nodes(self, net_params: NetParams) -> list[dict[str, Any]]:

@@ -8,6 +8,7 @@ that ring positions add up exactly: position = edge start + lane position.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any, ClassVar
 
 import numpy as np
@@ -15,7 +16,8 @@ import numpy as np
 from flowrun.config.params import InitialConfig, VehicleParams
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Edge, Network, NetworkSpec, Node, StartPositions
-from flowrun.networks.placement import place_on_closed_road
+from flowrun.networks.placement import SPACINGS, place_on_closed_road
+from flowrun.suggest import did_you_mean
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # length of the ring road, m
@@ -114,14 +116,30 @@ class RingNetwork(Network):
         )
 
     def start_positions(self, rng: np.random.Generator) -> StartPositions:
-        """Flow's initial placement on the ring (see :func:`place_on_closed_road`)."""
+        """Flow's initial placement on the ring (see :func:`place_on_closed_road`).
+
+        ``spacing: custom`` asks the network's ``gen_custom_start_pos``; an
+        ``edges_distribution`` other than ``all`` places cars on those edges only (Flow's
+        placement over open networks); a negative ``bunching`` counts as 0, as in Flow.
+        """
+        initial = self.initial_config
+        if initial.spacing == "custom" or initial.edges_distribution != "all":
+            return super().start_positions(rng)
+        if initial.spacing not in SPACINGS:
+            raise ConfigError(
+                f"unknown spacing {initial.spacing!r}{did_you_mean(str(initial.spacing), SPACINGS)}"
+                "; use 'uniform', 'random' or 'custom'",
+                path="spacing",
+            )
+        if initial.bunching < 0:
+            initial = replace(initial, bunching=0.0)
         lengths = [
             g.car_following_params.length
             for g in self.vehicles.groups
             for _ in range(g.num_vehicles)
         ]
         positions, lanes = place_on_closed_road(
-            self.spec.length, int(self.params["lanes"]), lengths, self.initial_config, rng
+            self.spec.length, int(self.params["lanes"]), lengths, initial, rng
         )
         n_edges = len(self.spec.edges)
         edge_len = self.spec.length / n_edges
