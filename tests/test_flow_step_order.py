@@ -62,3 +62,19 @@ def test_a_vehicles_flow_controller_gives_the_groups_vectorised_acceleration() -
         assert vk.get_lane_changing_controller(vid).commands_sumo is False
     finally:
         env.close()
+
+
+def test_tuple_actions_are_clipped_part_by_part() -> None:
+    import gymnasium
+
+    env = make_env(load("sugiyama"))
+    try:
+        space = gymnasium.spaces.Tuple(
+            (gymnasium.spaces.Box(-1.0, 1.0, (2,)), gymnasium.spaces.Discrete(3))
+        )
+        env._space_cache = (space, env._spaces()[1])
+        clipped = env.clip_actions((np.array([-5.0, 0.5]), 2))
+        assert clipped[0] == pytest.approx([-1.0, 0.5])
+        assert clipped[1] == 2
+    finally:
+        env.close()

@@ -133,6 +133,7 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         self._space_cache: tuple[gymnasium.Space[Any], gymnasium.Space[Any]] | None = None
         self._placement: RingPlacement | None = None
         self._bounds: tuple[np.ndarray, np.ndarray] | tuple[()] | None = None
+        self._clip_tuple = False
 
     # ------------------------------------------------------------------ Flow's hooks
     @property
@@ -279,7 +280,20 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         return self._space_cache
 
     def clip_actions(self, rl_actions: Any) -> Any:
-        """Clip a Box action to the action space when ``env_params.clip_actions``."""
+        """Clip a Box action (or each Box part of a Tuple action) to the action space when
+        ``env_params.clip_actions``."""
+        if self._bounds is None and isinstance(self._spaces()[0], gymnasium.spaces.Tuple):
+            self._bounds = ()
+            self._clip_tuple = self.env_params.clip_actions
+        if self._clip_tuple:
+            space = self._spaces()[0]
+            assert isinstance(space, gymnasium.spaces.Tuple)
+            return tuple(
+                np.clip(np.asarray(a, dtype=np.float64), sub.low, sub.high)
+                if isinstance(sub, gymnasium.spaces.Box)
+                else a
+                for a, sub in zip(rl_actions, space.spaces, strict=True)
+            )
         if self._bounds is None:
             space = self._spaces()[0]
             self._bounds = (
