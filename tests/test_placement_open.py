@@ -129,7 +129,13 @@ def test_bunching_leaves_road_empty_and_negative_bunching_counts_as_zero() -> No
 
 
 def test_unknown_spacing_is_refused() -> None:
-    with pytest.raises(ConfigError, match="unknown spacing 'custom'") as err:
+    with pytest.raises(ConfigError, match="unknown spacing 'even'") as err:
+        place(network(MergeNetwork, 4, spacing="even"))
+    assert err.value.path == "spacing"
+
+
+def test_custom_spacing_needs_the_networks_own_generator() -> None:
+    with pytest.raises(ConfigError, match="MergeNetwork.gen_custom_start_pos") as err:
         place(network(MergeNetwork, 4, spacing="custom"))
     assert err.value.path == "spacing"
 
