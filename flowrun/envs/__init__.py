@@ -5,6 +5,7 @@ from flowrun.envs.registry import env_names, register_envs, resolve_env_class
 from flowrun.envs.ring.accel import AccelEnv
 from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
 from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
+from flowrun.envs.test import TestEnv
 
 register_envs()
 
@@ -12,6 +13,7 @@ __all__ = [
     "AccelEnv",
     "Env",
     "LaneChangeAccelEnv",
+    "TestEnv",
     "WaveAttenuationEnv",
     "WaveAttenuationPOEnv",
     "env_names",

@@ -20,10 +20,11 @@ def _builtin() -> dict[str, type]:
     from flowrun.envs.ring.accel import AccelEnv
     from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
     from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
+    from flowrun.envs.test import TestEnv
 
     return {
         c.__name__: c
-        for c in (AccelEnv, WaveAttenuationEnv, WaveAttenuationPOEnv, LaneChangeAccelEnv)
+        for c in (AccelEnv, WaveAttenuationEnv, WaveAttenuationPOEnv, LaneChangeAccelEnv, TestEnv)
     }
 
 
