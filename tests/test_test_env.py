@@ -21,7 +21,8 @@ def test_test_env_runs_the_humans_and_rewards_with_the_given_function() -> None:
     try:
         obs, _ = env.reset(seed=0)
         assert obs.shape == (0,)
-        _, reward, terminated, truncated, info = env.step(None)
+        _, reward, terminated, _, _ = env.step(None)
+        assert not terminated
         assert reward == 7.0
         for _ in range(99):
             *_, truncated, info = env.step(None)

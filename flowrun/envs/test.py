@@ -24,12 +24,12 @@ class TestEnv(Env):
     __test__ = False  # not a pytest test class despite its name
 
     @property
-    def action_space(self) -> gymnasium.spaces.Box:
+    def action_space(self) -> gymnasium.spaces.Box:  # type: ignore[override]
         """No actions."""
         return gymnasium.spaces.Box(low=0.0, high=0.0, shape=(0,), dtype=np.float32)
 
     @property
-    def observation_space(self) -> gymnasium.spaces.Box:
+    def observation_space(self) -> gymnasium.spaces.Box:  # type: ignore[override]
         """No observations."""
         return gymnasium.spaces.Box(low=0.0, high=0.0, shape=(0,), dtype=np.float32)
 
