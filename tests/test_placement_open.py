@@ -135,7 +135,7 @@ def test_unknown_spacing_is_refused() -> None:
 
 
 def test_custom_spacing_needs_the_networks_own_generator() -> None:
-    with pytest.raises(ConfigError, match="MergeNetwork.gen_custom_start_pos") as err:
+    with pytest.raises(ConfigError, match=r"MergeNetwork\.gen_custom_start_pos") as err:
         place(network(MergeNetwork, 4, spacing="custom"))
     assert err.value.path == "spacing"
 
