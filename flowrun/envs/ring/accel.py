@@ -1,4 +1,8 @@
-"""``AccelEnv``: a central agent sets the acceleration of every RL car; all cars observed."""
+"""``AccelEnv``: a central agent sets the acceleration of every RL car; all cars observed.
+
+Flow's ``flow.envs.ring.accel``. Works on any network with a fixed number of cars (ring,
+figure eight, ...): Flow's figureeight0/1/2 benchmarks run it on the figure eight.
+"""
 
 from __future__ import annotations
 
@@ -17,7 +21,7 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     "max_decel": 3,
     # desired speed of all cars, m/s (the reward's target)
     "target_velocity": 10,
-    # observe cars sorted by position instead of by id
+    # observe and command cars sorted by absolute position instead of in id order
     "sort_vehicles": False,
 }
 
@@ -28,6 +32,16 @@ def clip_unit(x: np.ndarray) -> np.ndarray:
     return np.minimum(x, 1.0, out=x)
 
 
+def fit(values: np.ndarray, size: int) -> np.ndarray:
+    """``values`` cut or zero-padded to ``size`` entries (a fixed-size observation part)."""
+    if values.size == size:
+        return values
+    out = np.zeros(size)
+    n = min(size, values.size)
+    out[:n] = values[:n]
+    return out
+
+
 def acceleration_box(additional_params: dict[str, Any], num_rl: int) -> Box:
     """One acceleration per RL car in ``[-|max_decel|, max_accel]`` m/s^2."""
     return Box(
@@ -36,6 +50,62 @@ def acceleration_box(additional_params: dict[str, Any], num_rl: int) -> Box:
         shape=(num_rl,),
         dtype=np.float32,
     )
+
+
+class AbsolutePositions:
+    """Flow's ``absolute_position`` bookkeeping, over the kernel's vehicle rows.
+
+    At the start of an episode a car's absolute position is its position ``x``
+    (``get_x_by_id``); each update adds the change of ``x`` since the last update and takes
+    the result modulo the network length ``L``. A car that enters later starts at ``x mod L``.
+    On a ring this is ``x`` itself; on the figure eight it is the distance driven, wrapped.
+    """
+
+    def __init__(self) -> None:
+        self.table: Any = None
+        self.version = -1
+        self.ids: list[str] = []
+        self.value = np.zeros(0)
+        self.prev = np.zeros(0)
+
+    def current(self, vk: Any) -> bool:
+        """Whether the bookkeeping is of the kernel's present population."""
+        table = getattr(vk, "table", None)
+        return table is not None and table is self.table and table.version == self.version
+
+    def start(self, vk: Any) -> None:
+        """Absolute positions = positions now (Flow, at reset)."""
+        self.table, self.version = vk.table, vk.table.version
+        self.ids = list(vk.table.ids)
+        self.prev = np.array(vk.position, dtype=np.float64)
+        self.value = self.prev.copy()
+
+    def _follow(self, vk: Any, length: float) -> None:
+        """Realign the rows after cars entered or left (newcomers start at ``x mod L``)."""
+        known = dict(zip(self.ids, zip(self.value.tolist(), self.prev.tolist(), strict=True),
+                         strict=True))  # fmt: skip
+        x = np.asarray(vk.position, dtype=np.float64)
+        ids = list(vk.table.ids)
+        pairs = [known.get(v, (xi % length, xi)) for v, xi in zip(ids, x.tolist(), strict=True)]
+        self.value = np.array([p[0] for p in pairs], dtype=np.float64)
+        self.prev = np.array([p[1] for p in pairs], dtype=np.float64)
+        self.table, self.version, self.ids = vk.table, vk.table.version, ids
+
+    def update(self, vk: Any, length: float) -> None:
+        """Add each car's change of position since the last update, modulo ``length``."""
+        if vk.table is not self.table:
+            self.start(vk)
+        elif vk.table.version != self.version:
+            self._follow(vk, length)
+        x = np.array(vk.position, dtype=np.float64)
+        self.value = np.mod(self.value + (x - self.prev), length)
+        self.prev = x
+
+    def of_rows(self, vk: Any) -> np.ndarray:
+        """Absolute position of each row of the kernel (``x`` where not bookkept yet)."""
+        if not self.current(vk):
+            return np.asarray(vk.position, dtype=np.float64)
+        return self.value
 
 
 class RingAccelBase(Env):
@@ -76,28 +146,62 @@ class RingAccelBase(Env):
 
 
 class AccelEnv(RingAccelBase):
-    """Fully observed ring with accelerations for the RL cars (Flow's ``AccelEnv``).
+    """Fully observed network with accelerations for the RL cars (Flow's ``AccelEnv``).
 
-    Observation: ``2 * num_vehicles`` values in [0, 1]: speeds / max speed, then positions /
-    network length, ordered by id (or by position with ``sort_vehicles``).
-    Action: one acceleration per RL car in ``[-max_decel, max_accel]`` m/s^2.
-    Reward: :func:`desired_velocity` towards ``target_velocity`` (mean speed in evaluate mode).
+    Made for networks whose cars stay (ring, figure eight); the observation keeps its size
+    if cars come or go (zero-padded or cut to the initial count).
+
+    Observation: ``2 * num_vehicles`` values in [0, 1]: speeds / the network's max speed,
+    then positions ``get_x_by_id`` / network length, in :attr:`sorted_ids` order.
+    Action: one acceleration per RL car in ``[-max_decel, max_accel]`` m/s^2, in
+    :attr:`sorted_ids` order (extra actions are ignored when fewer RL cars are present).
+    Reward: :func:`~flowrun.envs.rewards.desired_velocity` towards ``target_velocity``
+    (0 after a collision); the mean speed in evaluate mode.
     Termination: collision; truncation: horizon.
     """
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        self._positions = AbsolutePositions()
+        self._observed_version: tuple[Any, int] | None = None
+        super().__init__(*args, **kwargs)
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        """Start a new episode; absolute positions restart at the positions (Flow)."""
+        obs, info = super().reset(seed=seed, options=options)
+        self._positions.start(self.k.vehicle)
+        if self._sorting:
+            obs = self._format_obs(self.get_state())
+        return obs, info
+
+    @property
+    def _sorting(self) -> bool:
+        return bool(self.env_params.additional_params.get("sort_vehicles"))
+
+    # ------------------------------------------------------------------ Flow's bookkeeping
     @property
     def absolute_position(self) -> dict[str, float]:
-        """Flow's ``absolute_position``: each car's start plus distance travelled, modulo the
-        ring length (m) - on a ring that is its position ``get_x_by_id`` taken mod length."""
+        """Flow's ``absolute_position``: each car's start position plus the distance it
+        drove, modulo the network length (m), updated every simulation step (before SUMO
+        moves the cars, as Flow's ``additional_command``). Before any bookkeeping of this
+        episode: ``get_x_by_id`` modulo the length."""
         vk = self.k.vehicle
+        positions: AbsolutePositions | None = getattr(self, "_positions", None)
+        if positions is not None and positions.current(vk):
+            return dict(zip(positions.ids, positions.value.tolist(), strict=True))
         length = self.k.network.length()
         return {veh_id: float(vk.get_x_by_id(veh_id)) % length for veh_id in vk.get_ids()}
 
     def _get_abs_position(self, veh_id: str) -> float:
-        """Flow's helper: :attr:`absolute_position` of one car (m)."""
-        return float(self.k.vehicle.get_x_by_id(veh_id)) % self.k.network.length()
+        """Flow's helper: :attr:`absolute_position` of one car (m; -1001 if unknown)."""
+        vk = self.k.vehicle
+        positions: AbsolutePositions | None = getattr(self, "_positions", None)
+        if positions is not None and positions.current(vk):
+            return float(positions.value[vk.table.row(veh_id)]) if veh_id in vk.table else -1001.0
+        return float(vk.get_x_by_id(veh_id)) % self.k.network.length()
 
     @property
     def sorted_ids(self) -> list[str]:
@@ -108,11 +212,50 @@ class AccelEnv(RingAccelBase):
             return sorted(ids, key=self._get_abs_position)
         return list(ids)
 
+    def _order(self) -> np.ndarray | slice:
+        """Kernel rows in :attr:`sorted_ids` order."""
+        if not self._sorting:
+            return slice(None)
+        return np.argsort(self._positions.of_rows(self.k.vehicle), kind="stable")
+
+    def additional_command(self) -> None:
+        """Flow's: mark the human cars observed when RL cars drive, and update
+        :attr:`absolute_position`."""
+        vk = self.k.vehicle
+        key = (vk.table, vk.table.version)
+        if key != self._observed_version:
+            self._observed_version = key
+            if vk.num_rl_vehicles > 0:
+                for veh_id in vk.get_human_ids():
+                    vk.set_observed(veh_id)
+        self._positions.update(vk, self.k.network.length())
+
+    # ------------------------------------------------------------------ Flow's hooks
+    def _apply_rl_actions(self, rl_actions: Any) -> None:
+        vk = self.k.vehicle
+        rows = np.arange(vk.table.size)[self._order()]
+        is_rl = vk.table.is_rl[rows]
+        ids = vk.table.ids
+        rl_ids = [ids[i] for i in rows[is_rl].tolist()]
+        actions = np.asarray(rl_actions, dtype=np.float64).reshape(-1)
+        n = min(len(rl_ids), actions.size)
+        if n:
+            vk.apply_acceleration(rl_ids[:n], actions[:n])
+
+    def get_state(self) -> Any:
+        """Speeds / max speed, then positions / length, in :attr:`sorted_ids` order, in [0, 1]."""
+        vk = self.k.vehicle
+        order = self._order()
+        n = self.initial_vehicles.num_vehicles
+        speed = fit(vk.speed[order] / self.k.network.max_speed(), n)
+        pos = fit(vk.position[order] / self.k.network.length(), n)
+        return clip_unit(np.concatenate([speed, pos]))
+
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired-velocity reward (mean speed when ``env_params.evaluate``)."""
         speeds = self.k.vehicle.speed
         if self.env_params.evaluate:
-            return float(np.mean(speeds))
+            return float(np.mean(speeds)) if speeds.size else 0.0
         reward = desired_velocity(
             speeds,
             float(self.env_params.additional_params["target_velocity"]),
