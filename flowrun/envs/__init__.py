@@ -1,6 +1,7 @@
-"""Environments: Flow's ``Env`` base on Gymnasium and the built-in ring tasks."""
+"""Environments: Flow's ``Env`` base on Gymnasium, the ring tasks and the merge."""
 
 from flowrun.envs.base import Env
+from flowrun.envs.merge import MergePOEnv
 from flowrun.envs.registry import env_names, register_envs, resolve_env_class
 from flowrun.envs.ring.accel import AccelEnv
 from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
@@ -13,6 +14,7 @@ __all__ = [
     "AccelEnv",
     "Env",
     "LaneChangeAccelEnv",
+    "MergePOEnv",
     "TestEnv",
     "WaveAttenuationEnv",
     "WaveAttenuationPOEnv",

@@ -17,6 +17,7 @@ from flowrun.suggest import did_you_mean, unknown_name
 
 
 def _builtin() -> dict[str, type]:
+    from flowrun.envs.merge import MergePOEnv
     from flowrun.envs.ring.accel import AccelEnv
     from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
     from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
@@ -24,7 +25,14 @@ def _builtin() -> dict[str, type]:
 
     return {
         c.__name__: c
-        for c in (AccelEnv, WaveAttenuationEnv, WaveAttenuationPOEnv, LaneChangeAccelEnv, TestEnv)
+        for c in (
+            AccelEnv,
+            WaveAttenuationEnv,
+            WaveAttenuationPOEnv,
+            LaneChangeAccelEnv,
+            MergePOEnv,
+            TestEnv,
+        )
     }
 
 
@@ -132,14 +140,22 @@ def _env_class(module: ModuleType, module_name: str, attr: str, name: str) -> ty
 
 
 def register_envs() -> None:
-    """Register every built-in env as ``flowrun/<Name>-v0`` with Gymnasium (idempotent)."""
+    """Register every built-in env as ``flowrun/<Name>-v0`` with Gymnasium (idempotent).
+
+    Without a ``config`` an env runs its default experiment: Flow's merge0 for
+    ``MergePOEnv`` (:mod:`flowrun.envs.defaults`), the ring for the others.
+    """
+    from flowrun.envs.defaults import DEFAULT_CONFIGS
+
     for name in env_names():
         env_id = f"flowrun/{name}-v0"
         if env_id in gymnasium.registry:
             continue
+        own_default = name in DEFAULT_CONFIGS
+        entry = "defaults:make_with_default" if own_default else "factory:make_registered"
         gymnasium.register(
             id=env_id,
-            entry_point="flowrun.envs.factory:make_registered",
+            entry_point=f"flowrun.envs.{entry}",
             kwargs={"env_name": name},
             disable_env_checker=True,
         )

@@ -1,0 +1,5 @@
+"""Flow's module path ``flow.envs.ring.lane_change_accel`` (the env lives in ``lane_change``)."""
+
+from flowrun.envs.ring.lane_change import ADDITIONAL_ENV_PARAMS, LaneChangeAccelEnv
+
+__all__ = ["ADDITIONAL_ENV_PARAMS", "LaneChangeAccelEnv"]
