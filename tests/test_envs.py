@@ -19,7 +19,14 @@ from flowrun.envs.rewards import desired_velocity
 from flowrun.errors import ConfigError
 
 RING_WAVE = Path(__file__).resolve().parent.parent / "configs" / "ring_wave.yaml"
-BUILTIN = ["AccelEnv", "LaneChangeAccelEnv", "WaveAttenuationEnv", "WaveAttenuationPOEnv"]
+BUILTIN = [
+    "AccelEnv",
+    "LaneChangeAccelEnv",
+    "MergePOEnv",
+    "TestEnv",
+    "WaveAttenuationEnv",
+    "WaveAttenuationPOEnv",
+]
 
 pytestmark = pytest.mark.sumo
 

@@ -185,3 +185,38 @@ def test_time_space_diagram_from_an_mcap_log(tmp_path: Path) -> None:
     assert times.size == positions.size == speeds.size == len(ids) == 4 * 20
     out = time_space_diagram(log)
     assert out == tmp_path / "ring_tsd.png" and out.stat().st_size > 0
+
+
+def test_desired_velocity_at_the_target_is_exactly_one_and_from_rest_exactly_zero() -> None:
+    # Flow takes the norm of the target vector, so these are exact (not 1 - 1e-16)
+    assert rewards.desired_velocity(fake_env([10.0] * 22)) == pytest.approx(1.0, abs=1e-6)
+    assert rewards.desired_velocity(fake_env([0.0] * 22)) == 0.0
+
+
+def test_headway_shaping_rewards_for_rl_cars() -> None:
+    class WithFollowers(FakeVehicles):
+        def get_follower(self, veh_id: str) -> str | None:
+            return {"car_0": "car_1", "car_2": None}.get(veh_id)
+
+    env = fake_env([5.0, 5.0, 5.0])
+    env.k.vehicle = WithFollowers(
+        env.k.vehicle.speed, env.k.vehicle.edge, rl_ids=["car_0", "car_2"],
+        headway={"car_0": 2.0, "car_1": 12.0, "car_2": 10.0},
+    )  # fmt: skip
+    # threshold 5: only car_0 (2 m) is below: ((5 - 2) / 5) ** 2 * 3 = 1.08, as a penalty
+    assert rewards.punish_small_rl_headways(env, 5, penalty_gain=3, penalty_exponent=2) == (
+        pytest.approx(-1.08)
+    )
+    # car_0's follower car_1 keeps 12 m; car_2 has none: 0.1 * 12
+    assert rewards.reward_rl_opening_headways(env) == pytest.approx(1.2)
+
+
+def test_queue_penalty_counts_the_cars_of_one_lane() -> None:
+    class Lanes(FakeVehicles):
+        def get_lane(self, veh_id: str) -> int:
+            return {"car_2": 0, "car_3": 1}.get(veh_id, 0)
+
+    env = fake_env([1.0, 1.0, 1.0, 1.0])
+    env.k.vehicle = Lanes(env.k.vehicle.speed, env.k.vehicle.edge)
+    # edge "b" holds car_2 (lane 0) and car_3 (lane 1)
+    assert rewards.punish_queues_in_lane(env, "b", 0, penalty_gain=2, penalty_exponent=2) == -2

@@ -202,3 +202,44 @@ __all__ = [
     "total_velocity",
     "vehicle_energy_consumption",
 ]
+
+
+def punish_small_rl_headways(
+    env: Any, headway_threshold: float, penalty_gain: float = 1, penalty_exponent: float = 1
+) -> float:
+    """Minus the sum, over RL cars closer than ``headway_threshold`` (m) to their leader, of
+    ``((threshold - headway) / threshold) ** penalty_exponent * penalty_gain`` (Flow)."""
+    vk = env.k.vehicle
+    total = 0.0
+    for veh_id in vk.get_rl_ids():
+        headway = float(vk.get_headway(veh_id))
+        if headway < headway_threshold:
+            total += ((headway_threshold - headway) / headway_threshold) ** penalty_exponent
+    return -abs(total * penalty_gain)
+
+
+def reward_rl_opening_headways(
+    env: Any, reward_gain: float = 0.1, reward_exponent: float = 1
+) -> float:
+    """``reward_gain`` times the sum of ``headway ** reward_exponent`` of the cars following
+    RL cars (m; cars without a follower, or with a negative headway, count 0) (Flow)."""
+    vk = env.k.vehicle
+    total = 0.0
+    for rl_id in vk.get_rl_ids():
+        follower = vk.get_follower(rl_id)
+        if not follower:
+            continue
+        headway = float(vk.get_headway(follower))
+        if headway >= 0 and np.isfinite(headway):
+            total += headway**reward_exponent
+    return total * reward_gain
+
+
+def punish_queues_in_lane(
+    env: Any, edge: str, lane: int, penalty_gain: float = 1, penalty_exponent: float = 1
+) -> float:
+    """Minus ``penalty_gain`` times (number of cars on lane ``lane`` of ``edge``) to the
+    ``penalty_exponent`` (Flow)."""
+    vk = env.k.vehicle
+    count = sum(1 for v in vk.get_ids_by_edge(edge) if vk.get_lane(v) == lane)
+    return -1.0 * (count**penalty_exponent) * penalty_gain

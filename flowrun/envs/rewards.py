@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import numpy.typing as npt
 
@@ -20,9 +18,9 @@ def desired_velocity(speeds: FloatArray, target_velocity: float, fail: bool = Fa
     n = speeds.size
     if fail or n == 0:
         return 0.0
-    max_cost = abs(target_velocity) * math.sqrt(n)
-    diff = speeds - target_velocity
-    cost = math.sqrt(float(diff.dot(diff)))
+    # both norms as Flow takes them (the target as a vector), so a perfect score is exactly 1
+    max_cost = float(np.linalg.norm(np.full(n, float(target_velocity))))
+    cost = float(np.linalg.norm(speeds - target_velocity))
     return max(max_cost - cost, 0.0) / (max_cost + FLOAT32_EPS)
 
 
