@@ -78,3 +78,19 @@ def test_tuple_actions_are_clipped_part_by_part() -> None:
         assert clipped[1] == 2
     finally:
         env.close()
+
+
+def test_flows_older_module_paths_import_the_same_classes() -> None:
+    from flowrun.envs import AccelEnv, LaneChangeAccelEnv, WaveAttenuationPOEnv
+    from flowrun.envs.loop.lane_changing import LaneChangeAccelEnv as OldLC
+    from flowrun.envs.loop.loop_accel import AccelEnv as OldAccel
+    from flowrun.envs.loop.wave_attenuation import WaveAttenuationPOEnv as OldWave
+    from flowrun.networks import FigureEightNetwork, HighwayNetwork, MergeNetwork
+    from flowrun.scenarios.figure_eight import Figure8Scenario
+    from flowrun.scenarios.highway import HighwayScenario
+    from flowrun.scenarios.merge import MergeScenario
+
+    assert (OldAccel, OldWave, OldLC) == (AccelEnv, WaveAttenuationPOEnv, LaneChangeAccelEnv)
+    assert (Figure8Scenario, HighwayScenario, MergeScenario) == (
+        FigureEightNetwork, HighwayNetwork, MergeNetwork,
+    )  # fmt: skip

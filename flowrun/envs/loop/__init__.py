@@ -1,0 +1,1 @@
+"""Flow < 0.5 package ``flow.envs.loop`` (the ring envs live in ``flowrun.envs.ring``)."""
