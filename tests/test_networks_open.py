@@ -8,6 +8,7 @@ import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from flowrun.config.params import InitialConfig, NetParams, VehicleParams
@@ -320,3 +321,17 @@ def test_list_networks_shows_each_type_with_its_parameters() -> None:
         and "boundary_cell_length=500" in lines["highway"]
     )
     assert "MergeNetwork" in lines["merge"] and "pre_merge_length=200" in lines["merge"]
+
+
+def test_figure_eight_edge_starts_follow_the_loop_without_gaps_beyond_the_links() -> None:
+    from flowrun.networks.figure_eight import LOOP, figure_eight_edge_starts
+
+    r, lanes = 30.0, 1
+    starts = figure_eight_edge_starts(r, lanes)
+    length = {"bottom": r, "top": r, "right": r, "left": r,
+              "upper_ring": 3 * np.pi * r / 2, "lower_ring": 3 * np.pi * r / 2}  # fmt: skip
+    for a, b in zip(LOOP, LOOP[1:], strict=False):
+        # the next edge starts after this one plus a junction link (< 10 m), never before
+        assert 0 < starts[b] - (starts[a] + length[a]) < 10, (a, b)
+    end = starts["lower_ring"] + length["lower_ring"]
+    assert end == pytest.approx(4 * r + 3 * np.pi * r + 2 * (2.9 + 3.3 * lanes) + 4 * 0.28)

@@ -59,7 +59,8 @@ def figure_eight_edge_starts(radius: float, lanes: int) -> dict[str, float]:
     absolute positions on a crossing link run up to ``3.2 * lanes`` m past the next edge's
     start, as they would have in Flow with a newer SUMO.
     """
-    ring, cross, junction = 3 * radius * math.pi / 2, 2 * radius, junction_length(lanes)
+    # ``ring`` is a quarter circle: each loop is three of them
+    ring, cross, junction = radius * math.pi / 2, 2 * radius, junction_length(lanes)
     gap = INNER_SPACE
     return {
         "bottom": gap,
