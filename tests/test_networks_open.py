@@ -330,7 +330,7 @@ def test_figure_eight_edge_starts_follow_the_loop_without_gaps_beyond_the_links(
     starts = figure_eight_edge_starts(r, lanes)
     length = {"bottom": r, "top": r, "right": r, "left": r,
               "upper_ring": 3 * np.pi * r / 2, "lower_ring": 3 * np.pi * r / 2}  # fmt: skip
-    for a, b in zip(LOOP, LOOP[1:], strict=False):
+    for a, b in itertools.pairwise(LOOP):
         # the next edge starts after this one plus a junction link (< 10 m), never before
         assert 0 < starts[b] - (starts[a] + length[a]) < 10, (a, b)
     end = starts["lower_ring"] + length["lower_ring"]
