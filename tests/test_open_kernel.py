@@ -289,3 +289,20 @@ def test_same_seed_gives_the_same_departures_and_trajectories() -> None:
             env.close()
 
     assert roll() == roll()
+
+
+def test_network_length_counts_the_junctions_and_non_internal_length_does_not() -> None:
+    env = make()
+    try:
+        env.reset(seed=0)
+        net = env.k.network
+        assert net.non_internal_length() == pytest.approx(500.0)
+        lane = env.k.vehicle.api.lane
+        junctions = sum(
+            lane.getLength(f"{e}_0") for e in {":b_0", ":b_1", ":c_0"} if f"{e}_0" in
+            lane.getIDList()
+        )  # fmt: skip
+        assert junctions > 0
+        assert net.length() == pytest.approx(500.0 + junctions)
+    finally:
+        env.close()

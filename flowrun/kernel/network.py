@@ -26,10 +26,22 @@ class NetworkKernel:
             (s, e) for e, s in self._edge_starts.items() if not e.startswith(":")
         )
         self._max_speed = max((e.speed for e in spec.edges), default=0.0)
+        self._length = spec.length + self._internal_length()
 
     def length(self) -> float:
-        """Total length of the network along its edges, m."""
-        return self.spec.length
+        """Total length of the network, m: its edges plus, once SUMO has built them, its
+        junction-internal edges (Flow's ``length``; see :meth:`non_internal_length`)."""
+        return self._length
+
+    def _internal_length(self) -> float:
+        lanes = self.lanes
+        if lanes is None or not lanes.internal.any():
+            return 0.0
+        longest: dict[int, float] = {}
+        for e, ln in zip(lanes.edge_index[lanes.internal].tolist(),
+                         lanes.length[lanes.internal].tolist(), strict=True):  # fmt: skip
+            longest[e] = max(longest.get(e, 0.0), ln)
+        return float(sum(longest.values()))
 
     def edge_length(self, edge_id: str) -> float:
         """Length of one edge, m (internal edges included; -1001 for an unknown edge)."""
