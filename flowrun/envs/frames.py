@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import math
+import weakref
 from dataclasses import dataclass
 from itertools import groupby
 
@@ -11,6 +13,7 @@ import numpy.typing as npt
 
 from flowrun.kernel import Kernel
 from flowrun.kernel.geometry import RingPlacement
+from flowrun.kernel.population import Population
 from flowrun.recording.frames import StepStats, VehicleFrame
 
 FloatArray = npt.NDArray[np.float64]
@@ -33,7 +36,7 @@ def snapshot_frame(k: Kernel, step: int, deferred: bool = False) -> VehicleFrame
     return VehicleFrame(
         step=step,
         time=k.simulation.time,
-        ids=vk.table.ids,
+        ids=_frozen_ids(vk.table),
         types=vk.table.types,
         edges=edges,
         lanes=vk.lanes,
@@ -52,6 +55,27 @@ def snapshot_frame(k: Kernel, step: int, deferred: bool = False) -> VehicleFrame
 
 
 _EMPTY = np.zeros(0)
+
+#: population -> (its version, a private copy of its ids at that version)
+_ID_COPIES: weakref.WeakKeyDictionary[Population, tuple[int, list[str]]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _frozen_ids(pop: Population) -> list[str]:
+    """The population's ids as a list nobody changes later, copied once per roster.
+
+    The population may append to its own ``ids`` list in place when cars enter, which would
+    change the ids of frames still queued; frames hold this copy instead. Between changes
+    every frame gets the same list object, which keeps the recorder's identity checks cheap.
+    """
+    version = pop.version
+    cached = _ID_COPIES.get(pop)
+    if cached is not None and cached[0] == version:
+        return cached[1]
+    ids = list(pop.ids)
+    _ID_COPIES[pop] = (version, ids)
+    return ids
 
 
 def complete_frames(records: list[StepRecord], placement: RingPlacement, dt: float) -> None:
@@ -94,6 +118,8 @@ class StepRecord:
         frame: the full vehicle frame when recording, else ``None``.
         reward: reward of the RL step this simulation step belongs to (set by ``Env.step``).
         prev_speed: the speeds of the step before, kept while the frame is incomplete.
+        departed: vehicles that entered the network in this step.
+        arrived: vehicles that left the network in this step.
     """
 
     step: int
@@ -104,6 +130,8 @@ class StepRecord:
     frame: VehicleFrame | None
     reward: float = math.nan
     prev_speed: FloatArray | None = None
+    departed: int = 0
+    arrived: int = 0
 
 
 def step_record(k: Kernel, step: int, with_frame: bool, deferred: bool = False) -> StepRecord:
@@ -113,8 +141,9 @@ def step_record(k: Kernel, step: int, with_frame: bool, deferred: bool = False) 
     frame = snapshot_frame(k, step, deferred) if with_frame else None
     prev = vk.prev_speed if with_frame and deferred else None
     return StepRecord(
-        step, sim.time, vk.speed, sim.step_collisions, sim.step_teleports, frame, math.nan, prev
-    )
+        step, sim.time, vk.speed, sim.step_collisions, sim.step_teleports, frame, math.nan, prev,
+        len(vk.departed_ids), len(vk.arrived_ids),
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -131,6 +160,8 @@ class StatsBatch:
     reward: FloatArray
     collisions: IntArray
     teleports: IntArray
+    departed: IntArray
+    arrived: IntArray
 
     def __len__(self) -> int:
         return int(self.step.size)
@@ -140,6 +171,7 @@ class StatsBatch:
         columns = (
             self.step, self.time, self.num_vehicles, self.mean_speed, self.min_speed,
             self.max_speed, self.speed_std, self.reward, self.collisions, self.teleports,
+            self.departed, self.arrived,
         )  # fmt: skip
         return [StepStats(*row) for row in zip(*(c.tolist() for c in columns), strict=True)]
 
@@ -166,6 +198,8 @@ def batch_stats(records: list[StepRecord]) -> StatsBatch:
         np.array([r.reward for r in records], dtype=np.float64),
         np.array([r.collisions for r in records], dtype=np.int64),
         np.array([r.teleports for r in records], dtype=np.int64),
+        np.array([r.departed for r in records], dtype=np.int64),
+        np.array([r.arrived for r in records], dtype=np.int64),
     )
 
 
@@ -184,3 +218,21 @@ def _speed_aggregates(speed: FloatArray) -> tuple[np.ndarray, ...]:
         np.maximum.reduce(speed, axis=1),
         np.sqrt(np.add.reduce(dev * dev, axis=1) / n),
     )
+
+
+def network_metadata(k: Kernel) -> dict[str, str]:
+    """Facts about the episode's network that a log needs to be plotted on its own.
+
+    ``main_route``: the network's main road (JSON list of edges; time-space diagrams follow
+    it), ``edge_starts``: every edge's start along the network (JSON object, m; internal
+    edges included, Flow's ``total_edgestarts_dict``), ``network_closed``: ``true`` on a ring,
+    ``network_length``: m. Call after ``reset``.
+    """
+    net = k.network
+    spec = net.spec
+    return {
+        "main_route": json.dumps(list(spec.main_route)),
+        "edge_starts": json.dumps(net.total_edgestarts_dict),
+        "network_closed": "true" if spec.closed else "false",
+        "network_length": repr(float(spec.length)),
+    }

@@ -13,6 +13,7 @@ from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.envs.base import Env
 from flowrun.envs.factory import env_class, make_env
+from flowrun.envs.frames import network_metadata
 from flowrun.errors import ConfigError
 from flowrun.experiment.metrics import RunMetrics
 from flowrun.experiment.rundir import create_run_dir, versions, write_json
@@ -86,14 +87,19 @@ def open_run_log(
     record_every: int = 1,
     extra: dict[str, str] | None = None,
 ) -> McapRecorder:
-    """The MCAP log of one run: metadata, the config and the network as attachments.
+    """The MCAP log of one run: metadata (with the network's main road and edge starts), the
+    config and the network as attachments.
 
     Call after ``env.reset`` (the network file of the episode exists then).
     """
     attachments = {"config.yaml": dump_config(cfg).encode()}
     if env.k.net_file is not None:
         attachments["network.net.xml"] = env.k.net_file.read_bytes()
-    meta = {**log_metadata(cfg, seed, run, record_every), **(extra or {})}
+    meta = {
+        **log_metadata(cfg, seed, run, record_every),
+        **network_metadata(env.k),
+        **(extra or {}),
+    }
     return McapRecorder(path, metadata=meta, attachments=attachments, record_every=record_every)
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.envs.base import Env
+from flowrun.envs.frames import network_metadata
 from flowrun.errors import ConfigError
 from flowrun.experiment.rundir import unique_dir
 from flowrun.recording.writer import McapRecorder
@@ -48,6 +49,7 @@ def run_recorder(
         "sim_step": repr(env.sim_params.sim_step),
         "sims_per_step": str(env.env_params.sims_per_step),
         "record_every": "1",
+        **network_metadata(env.k),
     }
     attachments: dict[str, bytes] = {}
     if cfg is not None:

@@ -29,6 +29,9 @@ class RunMetrics:
         episode_return: sum of the RL-step rewards.
         collisions: collisions SUMO reported.
         teleports: teleports SUMO started.
+        departed: vehicles that entered the network during the run (inflows; the cars placed
+            at the start are not counted).
+        arrived: vehicles that left the network during the run.
     """
 
     run: int
@@ -43,6 +46,8 @@ class RunMetrics:
     episode_return: float
     collisions: int
     teleports: int
+    departed: int = 0
+    arrived: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict for ``metrics.json``."""
@@ -65,6 +70,8 @@ class RunAccumulator:
         self.max_speed = -math.inf
         self.collisions = 0
         self.teleports = 0
+        self.departed = 0
+        self.arrived = 0
 
     def add_batch(self, batch: StatsBatch) -> None:
         """Fold in the statistics of consecutive steps."""
@@ -78,6 +85,8 @@ class RunAccumulator:
         self.max_speed = max(self.max_speed, float(np.fmax.reduce(batch.max_speed)))
         self.collisions += int(batch.collisions.sum())
         self.teleports += int(batch.teleports.sum())
+        self.departed += int(batch.departed.sum())
+        self.arrived += int(batch.arrived.sum())
 
     def result(self, run: int, episode_return: float) -> RunMetrics:
         """The metrics of everything added so far."""
@@ -100,4 +109,6 @@ class RunAccumulator:
             episode_return=float(episode_return),
             collisions=self.collisions,
             teleports=self.teleports,
+            departed=self.departed,
+            arrived=self.arrived,
         )

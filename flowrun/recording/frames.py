@@ -81,6 +81,10 @@ class StepStats:
         reward: reward of the RL step this simulation step belongs to (``nan`` if none).
         collisions: collisions SUMO reported in this step.
         teleports: teleports SUMO started in this step.
+        departed: vehicles that entered the network since the previous logged step (this
+            step's own when every step is logged; 0 in logs written before flowrun logged it).
+        arrived: vehicles that left the network (end of route, or removed) since the previous
+            logged step.
     """
 
     step: int
@@ -93,3 +97,5 @@ class StepStats:
     reward: float
     collisions: int
     teleports: int
+    departed: int = 0
+    arrived: int = 0

@@ -79,6 +79,9 @@ _STATS_FIELDS: tuple[tuple[str, int, bool], ...] = (
     ("reward", _F.TYPE_DOUBLE, False),
     ("collisions", _F.TYPE_UINT32, False),
     ("teleports", _F.TYPE_UINT32, False),
+    # Added for open networks; older logs leave them out and read back as 0.
+    ("departed", _F.TYPE_UINT32, False),
+    ("arrived", _F.TYPE_UINT32, False),
 )
 
 
@@ -125,7 +128,7 @@ _FLOAT_KEYS = tuple(_VK[name] for name in FLOAT_COLUMNS)
 # make one-byte keys.
 _STEP_KEY, _TIME_KEY, _ROSTER_KEY = _VK["step"], _VK["time"][0], _VK["roster_version"]
 _NUM_VEHICLES_KEY, _COLLISIONS_KEY = _SK["num_vehicles"], _SK["collisions"]
-_TELEPORTS_KEY = _SK["teleports"]
+_TELEPORTS_KEY, _DEPARTED_KEY, _ARRIVED_KEY = _SK["teleports"], _SK["departed"], _SK["arrived"]
 _KEYED_DOUBLE = struct.Struct("<Bd").pack
 _STATS_DOUBLES = struct.Struct("<" + "Bd" * 5).pack  # mean/min/max/std speed, reward
 _STATS_DOUBLE_KEYS = tuple(
@@ -251,6 +254,8 @@ def encode_stats(stats: StepStats) -> bytes:
             tail,
             _COLLISIONS_KEY + wire.varint(collisions) if collisions else b"",
             _TELEPORTS_KEY + wire.varint(teleports) if teleports else b"",
+            _DEPARTED_KEY + wire.varint(s.departed) if s.departed else b"",
+            _ARRIVED_KEY + wire.varint(s.arrived) if s.arrived else b"",
         )
     )
 
@@ -302,7 +307,8 @@ def frame_from_message(msg: Any, keep: list[int] | None = None) -> VehicleFrame:
 
 
 def decode_stats(data: bytes) -> StepStats:
-    """Parse ``/flowrun/stats`` bytes into a :class:`StepStats`."""
+    """Parse ``/flowrun/stats`` bytes into a :class:`StepStats` (``departed``/``arrived`` are 0
+    in logs written before they existed: proto3 reads a missing field as zero)."""
     msg = StepStatsMsg.FromString(data)
     return StepStats(
         step=int(msg.step),
@@ -315,4 +321,6 @@ def decode_stats(data: bytes) -> StepStats:
         reward=float(msg.reward),
         collisions=int(msg.collisions),
         teleports=int(msg.teleports),
+        departed=int(msg.departed),
+        arrived=int(msg.arrived),
     )

@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import os
 import time
+from dataclasses import replace
 from pathlib import Path
 from types import TracebackType
 from typing import IO, Any
@@ -62,7 +63,9 @@ class McapRecorder:
         metadata: key/value pairs stored in the ``flowrun`` metadata record (versions, seed,
             resolved config, ...).
         attachments: file name -> content (e.g. ``config.yaml``, ``network.net.xml``).
-        record_every: keep only steps whose index is a multiple of this (1 keeps all).
+        record_every: keep only steps whose index is a multiple of this (1 keeps all); the
+            ``departed``/``arrived`` counts of the steps left out are added to the next
+            logged step's, so their sums over a log stay exact.
         flush_every_s: wall-clock seconds between forced chunk flushes (crash safety).
         chunk_size: uncompressed bytes after which a chunk is closed anyway.
     """
@@ -88,6 +91,7 @@ class McapRecorder:
         self._roster: tuple[list[str], list[str], list[bool]] = ([], [], [])
         self._roster_version = 0
         self._encoder = schema.FrameEncoder()
+        self._departed = self._arrived = 0  # of steps thinned out since the last logged one
         self._closed = False
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -142,7 +146,17 @@ class McapRecorder:
             raise RecordingError(f"MCAP log {self.path} is already closed")
         step = frame.step
         if step % self.record_every:
+            # entries and exits of a thinned-out step count towards the next logged one
+            self._departed += stats.departed
+            self._arrived += stats.arrived
             return False
+        if self._departed or self._arrived:
+            stats = replace(
+                stats,
+                departed=stats.departed + self._departed,
+                arrived=stats.arrived + self._arrived,
+            )
+            self._departed = self._arrived = 0
         stamp = to_ns(frame.time)
         seq = step & 0xFFFFFFFF
         # The kernel passes the same roster objects while the roster holds: check identity
