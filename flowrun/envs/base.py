@@ -15,6 +15,7 @@ import logging
 import shutil
 import tempfile
 from abc import ABCMeta, abstractmethod
+from collections import deque
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, ClassVar
@@ -134,6 +135,11 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         self._placement: RingPlacement | None = None
         self._bounds: tuple[np.ndarray, np.ndarray] | tuple[()] | None = None
         self._clip_tuple = False
+        #: RL cars waiting for a controlled place (Flow's ``rl_queue``) and the controlled
+        #: ones in arrival order (Flow's ``rl_veh``); see :meth:`update_rl_queue`
+        self.rl_queue: deque[str] = deque()
+        self.rl_veh: list[str] = []
+        self._queue_key: tuple[Any, int] | None = None
 
     # ------------------------------------------------------------------ Flow's hooks
     @property
@@ -161,6 +167,29 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
     def additional_command(self) -> None:
         """Anything to do every simulation step besides RL actions (optional)."""
 
+    def update_rl_queue(self, places: int | None = None) -> None:
+        """Keep :attr:`rl_veh` (at most ``places`` RL cars, first come first served) and
+        :attr:`rl_queue` current as RL cars enter and leave the network.
+
+        Cars that left are dropped, cars that entered are queued, and queued cars take free
+        places in arrival order. Cheap to call often: nothing is done unless the population
+        changed since the last call.
+        """
+        vk = self.k.vehicle
+        key = (vk.table, vk.table.version)
+        if key == self._queue_key:
+            return
+        self._queue_key = key
+        rl_now = vk.get_rl_ids()
+        present = set(rl_now)
+        self.rl_veh = [v for v in self.rl_veh if v in present]
+        self.rl_queue = deque(v for v in self.rl_queue if v in present)
+        known = set(self.rl_veh).union(self.rl_queue)
+        self.rl_queue.extend(v for v in rl_now if v not in known)
+        limit = len(present) if places is None else places
+        while self.rl_queue and len(self.rl_veh) < limit:
+            self.rl_veh.append(self.rl_queue.popleft())
+
     def episode_network(self) -> Network:
         """The network of the next episode (override to vary it, e.g. the ring length)."""
         return self.network
@@ -175,6 +204,9 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         super().reset(seed=seed)
         self.network = self.episode_network()
         self.scenario = self.network
+        self.rl_queue.clear()
+        self.rl_veh = []
+        self._queue_key = None
         start = self.network.start_positions(self.np_random)
         table = build_table(
             self.network.vehicles, self.controls, start, self.network.spec, self.np_random

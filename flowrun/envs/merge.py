@@ -7,7 +7,6 @@ network; up to ``num_rl`` of them, first come first served, are observed and con
 
 from __future__ import annotations
 
-from collections import deque
 from typing import Any, ClassVar
 
 import numpy as np
@@ -116,14 +115,9 @@ class MergePOEnv(Env):
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
-        #: AVs waiting for a place among the controlled ones (Flow's ``rl_queue``)
-        self.rl_queue: deque[str] = deque()
-        #: the controlled AVs, in observation order (Flow's ``rl_veh``)
-        self.rl_veh: list[str] = []
         #: leaders and followers of the controlled AVs at the last observation (Flow)
         self.leader: list[str] = []
         self.follower: list[str] = []
-        self._queue_key: tuple[Any, int] | None = None
         super().__init__(*args, **kwargs)
         self.num_rl = self._num_rl()
         self._obs_low = np.tile(OBS_LOW, self.num_rl)
@@ -157,32 +151,15 @@ class MergePOEnv(Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
         """Start a new episode with no AV queued or controlled."""
-        self.rl_queue.clear()
-        self.rl_veh = []
         self.leader, self.follower = [], []
-        self._queue_key = None
         return super().reset(seed=seed, options=options)
 
     # ------------------------------------------------------------------ the AV queue
-    def update_rl_queue(self) -> None:
-        """Drop AVs that left, queue AVs that entered, fill :attr:`rl_veh` up to ``num_rl``.
-
-        Flow does this in ``additional_command``; flowrun also does it before each
-        observation, so the observation never holds a car that has just left.
-        """
-        vk = self.k.vehicle
-        key = (vk.table, vk.table.version)
-        if key == self._queue_key:
-            return
-        self._queue_key = key
-        rl_now = vk.get_rl_ids()
-        present = set(rl_now)
-        self.rl_veh = [v for v in self.rl_veh if v in present]
-        self.rl_queue = deque(v for v in self.rl_queue if v in present)
-        known = set(self.rl_veh).union(self.rl_queue)
-        self.rl_queue.extend(v for v in rl_now if v not in known)
-        while self.rl_queue and len(self.rl_veh) < self.num_rl:
-            self.rl_veh.append(self.rl_queue.popleft())
+    def update_rl_queue(self, places: int | None = None) -> None:
+        """The base's AV queue with ``num_rl`` places (Flow does this in
+        ``additional_command``; flowrun also before each observation, so the observation
+        never holds a car that has just left)."""
+        super().update_rl_queue(self.num_rl if places is None else places)
 
     def additional_command(self) -> None:
         """Flow's: keep the AV queue current and mark the observed neighbours."""
