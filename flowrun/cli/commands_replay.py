@@ -18,14 +18,19 @@ from flowrun.errors import RecordingError
 from flowrun.recording import McapLog, McapRecorder, open_log, repair
 from flowrun.replay import (
     compare,
+    layout_for,
+    outflow,
+    parse_route,
     plot_speeds,
     plot_time_space,
+    plot_traffic,
     plot_vehicle_speeds,
     speed_series,
     summarize,
     summary_rows,
     time_space_points,
     to_csv,
+    traffic_series,
 )
 from flowrun.replay.plots import plot_stride
 
@@ -35,6 +40,7 @@ class PlotKind(StrEnum):
 
     time_space = "time-space"
     speed = "speed"
+    traffic = "traffic"
     all = "all"
 
 
@@ -101,7 +107,22 @@ def register(app: typer.Typer) -> None:
         vehicles: Annotated[
             str | None, typer.Option("--vehicles", help="Only these vehicle ids: id,id,...")
         ] = None,
-        plot: Annotated[PlotKind | None, typer.Option("--plot", help="Write PNG plots.")] = None,
+        plot: Annotated[
+            PlotKind | None,
+            typer.Option(
+                "--plot",
+                help="Write PNG plots: time-space diagram, speeds, traffic (speed, density "
+                "and outflow per minute), or all.",
+            ),
+        ] = None,
+        route: Annotated[
+            str | None,
+            typer.Option(
+                "--route",
+                help="Edges of the road to plot along: a,b,c (default: the network's main "
+                "road, e.g. inflow_highway,left,center on the merge; on a ring the ring).",
+            ),
+        ] = None,
         out: Annotated[
             Path | None,
             typer.Option("--out", help="Folder for plots (default: <log folder>/replay)."),
@@ -145,7 +166,9 @@ def register(app: typer.Typer) -> None:
             if len(logs) == 2 and (csv is not None or foxglove is not None):
                 raise RecordingError("--csv and --foxglove work on one log; drop the second log")
             chosen = _parse_vehicles(vehicles)
+            edges = parse_route(route) if route is not None else None
             opened = [open_log(p) for p in logs]
+            layouts = [layout_for(lg, edges) for lg in opened]
             series = [speed_series(lg, start_s=start, end_s=end, vehicles=chosen) for lg in opened]
             if chosen is not None:
                 seen = set().union(*(s.vehicle_types for s in series))
@@ -192,13 +215,20 @@ def register(app: typer.Typer) -> None:
                 if plot in (PlotKind.speed, PlotKind.all):
                     written.append(plot_speeds(opened, folder / "speeds.png", series=series))
                 if plot in (PlotKind.time_space, PlotKind.all):
-                    for i, lg in enumerate(opened):
+                    for i, (lg, layout) in enumerate(zip(opened, layouts, strict=True)):
                         data = time_space_points(
-                            lg, start_s=start, end_s=end, vehicles=chosen, every=plot_stride(lg)
+                            lg,
+                            start_s=start,
+                            end_s=end,
+                            vehicles=chosen,
+                            every=plot_stride(lg),
+                            route=layout,
                         )
                         suffix = "" if len(opened) == 1 else ("_A", "_B")[i]
                         written.append(
-                            plot_time_space(lg, folder / f"time_space{suffix}.png", data=data)
+                            plot_time_space(
+                                lg, folder / f"time_space{suffix}.png", data=data, route=layout
+                            )
                         )
                         if plot is PlotKind.all:
                             written.append(
@@ -206,5 +236,13 @@ def register(app: typer.Typer) -> None:
                                     lg, folder / f"vehicle_speeds{suffix}.png", data=data
                                 )
                             )
+                if plot in (PlotKind.traffic, PlotKind.all):
+                    for i, (lg, layout) in enumerate(zip(opened, layouts, strict=True)):
+                        suffix = "" if len(opened) == 1 else ("_A", "_B")[i]
+                        traffic = traffic_series(lg, layout, start_s=start, end_s=end)
+                        flow = outflow(list(lg.stats(start, end)))
+                        written.append(
+                            plot_traffic(lg, folder / f"traffic{suffix}.png", traffic, flow)
+                        )
                 for path in written:
                     typer.echo(f"wrote {path}")

@@ -10,6 +10,7 @@ import numpy as np
 
 from flowrun.recording import McapLog
 from flowrun.recording.frames import FloatArray
+from flowrun.replay.route import RouteLayout
 
 StrArray = np.ndarray
 
@@ -124,8 +125,22 @@ def time_space_points(
     end_s: float | None = None,
     vehicles: Iterable[str] | None = None,
     every: int = 1,
+    route: RouteLayout | None = None,
 ) -> TimeSpace:
-    """Time-space points, reading every ``every``-th logged step."""
+    """Time-space points, reading every ``every``-th logged step.
+
+    Args:
+        log: an opened log.
+        start_s: first simulation time to read, s.
+        end_s: last simulation time to read, s.
+        vehicles: only these vehicle ids (``None``: all).
+        every: read every n-th logged step.
+        route: positions along this route, and only the cars on it (its edges and the
+            junctions between them); ``None``: the logged network position of every car
+            (the ring position on a ring).
+    """
+    if route is not None:
+        return _route_points(log, route, start_s, end_s, vehicles, every)
     wanted = None if vehicles is None else set(vehicles)
     t_parts, p_parts, v_parts, id_parts, rl_parts = [], [], [], [], []
     last_ids: list[str] | None = None
@@ -153,17 +168,55 @@ def time_space_points(
         v_parts.append(speed)
         id_parts.append(id_arr)
         rl_parts.append(rl)
-
-    def cat(parts: list[np.ndarray], dtype: type) -> np.ndarray:
-        return np.concatenate(parts) if parts else np.array([], dtype=dtype)
-
     return TimeSpace(
-        times=cat(t_parts, np.float64),
-        positions=cat(p_parts, np.float64),
-        speeds=cat(v_parts, np.float64),
-        ids=cat(id_parts, str),
-        is_rl=cat(rl_parts, np.bool_),
+        times=_cat(t_parts, np.float64),
+        positions=_cat(p_parts, np.float64),
+        speeds=_cat(v_parts, np.float64),
+        ids=_cat(id_parts, str),
+        is_rl=_cat(rl_parts, np.bool_),
     )
+
+
+def _route_points(
+    log: McapLog,
+    route: RouteLayout,
+    start_s: float | None,
+    end_s: float | None,
+    vehicles: Iterable[str] | None,
+    every: int,
+) -> TimeSpace:
+    """:func:`time_space_points` along a route: the car set differs from step to step."""
+    wanted = None if vehicles is None else set(vehicles)
+    t_parts, p_parts, v_parts, id_parts, rl_parts = [], [], [], [], []
+    ids: list[str] = []
+    last_roster = -1
+    for k, msg in enumerate(log.vehicle_messages(start_s, end_s)):
+        if k % every:
+            continue
+        roster = msg.roster_version
+        if roster == 0 or roster != last_roster:
+            last_roster = roster
+            ids = list(msg.ids)
+        on, pos = route.locate(list(msg.edges), np.array(msg.lane_pos, dtype=np.float64))
+        if wanted is not None:
+            keep = np.array([ids[i] in wanted for i in on.tolist()], dtype=np.bool_)
+            on, pos = on[keep], pos[keep]
+        t_parts.append(np.full(pos.size, msg.time))
+        p_parts.append(pos)
+        v_parts.append(np.array(msg.speed, dtype=np.float64)[on])
+        id_parts.append(np.array([ids[i] for i in on.tolist()], dtype=str))
+        rl_parts.append(np.array(msg.is_rl, dtype=np.bool_)[on])
+    return TimeSpace(
+        times=_cat(t_parts, np.float64),
+        positions=_cat(p_parts, np.float64),
+        speeds=_cat(v_parts, np.float64),
+        ids=_cat(id_parts, str),
+        is_rl=_cat(rl_parts, np.bool_),
+    )
+
+
+def _cat(parts: list[np.ndarray], dtype: type) -> np.ndarray:
+    return np.concatenate(parts) if parts else np.array([], dtype=dtype)
 
 
 def time_space_data(

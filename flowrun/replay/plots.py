@@ -13,10 +13,14 @@ from matplotlib.figure import Figure
 from flowrun.errors import RecordingError
 from flowrun.recording import McapLog
 from flowrun.replay.analysis import SpeedSeries, TimeSpace, speed_series, time_space_points
+from flowrun.replay.route import RouteLayout
 from flowrun.replay.summary import run_label
+from flowrun.replay.traffic import Outflow, TrafficSeries
 
 MAX_POINTS = 1_500_000
 MAX_TRACES = 40
+MAX_RL_TRACES = 10
+MAX_RL_LABELS = 6
 _COLORS = ("tab:blue", "tab:orange")
 
 
@@ -36,10 +40,15 @@ def plot_stride(log: McapLog) -> int:
     frames = log.frame_count
     if not frames:
         return 1
-    # vehicles per frame is not in the index: probe the first frame.
-    first = next(log.vehicle_messages(), None)
-    per_frame = len(first.ids) if first is not None else 1
-    return max(1, int(np.ceil(frames * max(per_frame, 1) / MAX_POINTS)))
+    # vehicles per frame is not in the index: the stats topic has it for every step (cars
+    # come and go on open networks); a log without stats: probe the first frame.
+    counts = [s.num_vehicles for s in log.stats()]
+    if counts:
+        total = sum(counts) * frames / len(counts)
+    else:
+        first = next(log.vehicle_messages(), None)
+        total = frames * max(len(first.ids) if first is not None else 1, 1)
+    return max(1, int(np.ceil(total / MAX_POINTS)))
 
 
 def plot_time_space(
@@ -50,10 +59,21 @@ def plot_time_space(
     end_s: float | None = None,
     vehicles: Iterable[str] | None = None,
     data: TimeSpace | None = None,
+    route: RouteLayout | None = None,
 ) -> Path:
-    """Ring position vs time, points coloured by speed, RL vehicles highlighted."""
+    """Position vs time, points coloured by speed, RL vehicles highlighted.
+
+    The position is along ``route`` (dotted lines where its edges start) when one is given,
+    else the logged network position (the ring position on a ring). ``data``, when given,
+    must have been read with the same ``route``.
+    """
     ts = data or time_space_points(
-        log, start_s=start_s, end_s=end_s, vehicles=vehicles, every=plot_stride(log)
+        log,
+        start_s=start_s,
+        end_s=end_s,
+        vehicles=vehicles,
+        every=plot_stride(log),
+        route=route,
     )
     fig = Figure(figsize=(10, 6), layout="constrained")
     ax = fig.add_subplot()
@@ -84,7 +104,18 @@ def plot_time_space(
         ax.legend(loc="upper right", markerscale=4)
     fig.colorbar(sc, ax=ax, label="Speed [m/s]")
     ax.set_xlabel("Time [s]")
-    ax.set_ylabel("Position on ring [m]")
+    if route is None:
+        ring = log.metadata.get("network_closed", "true") == "true"
+        ax.set_ylabel("Position on ring [m]" if ring else "Position in the network [m]")
+    else:
+        ax.set_ylabel(f"Position along {route.label} [m]")
+        ax.set_ylim(0.0, route.length)
+        for edge, start in route.edge_starts():
+            ax.axhline(start, color="grey", linewidth=0.6, linestyle=":")
+            ax.annotate(
+                edge, (0.0, start), xycoords=("axes fraction", "data"), xytext=(3, 2),
+                textcoords="offset points", fontsize="x-small", color="dimgrey",
+            )  # fmt: skip
     ax.set_title(f"Time-space diagram - {run_label(log)}")
     return _save(fig, out_png)
 
@@ -133,24 +164,26 @@ def plot_vehicle_speeds(
     vehicles: Iterable[str] | None = None,
     data: TimeSpace | None = None,
 ) -> Path:
-    """Speed trace of each vehicle (at most ``MAX_TRACES``; RL vehicles always, in black)."""
+    """Speed trace of each vehicle, at most ``MAX_TRACES`` picked evenly in order of
+    appearance; RL vehicles in black (all of them up to ``MAX_RL_TRACES``, each named up to
+    ``MAX_RL_LABELS``)."""
     ts = data or time_space_points(
         log, start_s=start_s, end_s=end_s, vehicles=vehicles, every=plot_stride(log)
     )
     ids = list(dict.fromkeys(ts.ids.tolist()))
-    rl = set(ts.ids[ts.is_rl].tolist())
-    others = [v for v in ids if v not in rl]
-    if len(others) + len(rl) > MAX_TRACES:
-        pick = np.linspace(0, len(others) - 1, max(MAX_TRACES - len(rl), 1)).astype(int)
-        others = [others[i] for i in sorted(set(pick.tolist()))]
+    rl_set = set(ts.ids[ts.is_rl].tolist())
+    rl = _evenly([v for v in ids if v in rl_set], MAX_RL_TRACES)
+    others = _evenly([v for v in ids if v not in rl_set], max(MAX_TRACES - len(rl), 1))
     fig = Figure(figsize=(10, 5), layout="constrained")
     ax = fig.add_subplot()
     for vid in others:
         sel = ts.ids == vid
         ax.plot(ts.times[sel], ts.speeds[sel], linewidth=0.7, alpha=0.7)
-    for vid in sorted(rl):
+    named = len(rl) <= MAX_RL_LABELS
+    for k, vid in enumerate(rl):
         sel = ts.ids == vid
-        ax.plot(ts.times[sel], ts.speeds[sel], color="black", linewidth=1.6, label=f"{vid} (RL)")
+        label = f"{vid} (RL)" if named else ("RL vehicles" if k == 0 else None)
+        ax.plot(ts.times[sel], ts.speeds[sel], color="black", linewidth=1.6, label=label)
     if rl:
         ax.legend(loc="best", fontsize="small")
     ax.set_xlabel("Time [s]")
@@ -158,4 +191,43 @@ def plot_vehicle_speeds(
     shown = f"{len(others) + len(rl)} of {len(ids)} vehicles"
     ax.set_title(f"Vehicle speeds ({shown}) - {run_label(log)}")
     ax.grid(alpha=0.3)
+    return _save(fig, out_png)
+
+
+def _evenly(ids: list[str], most: int) -> list[str]:
+    """At most ``most`` of ``ids``, picked evenly from first to last."""
+    if len(ids) <= most:
+        return ids
+    pick = np.linspace(0, len(ids) - 1, most).astype(int)
+    return [ids[i] for i in sorted(set(pick.tolist()))]
+
+
+def plot_traffic(
+    log: McapLog, out_png: str | os.PathLike[str], series: TrafficSeries, flow: Outflow
+) -> Path:
+    """Three panels over time: speed and density on the road, outflow per bin (veh/h)."""
+    fig = Figure(figsize=(10, 8), layout="constrained")
+    speed_ax, density_ax, flow_ax = fig.subplots(3, 1, sharex=True)
+    t = series.times
+    speed_ax.fill_between(t, series.min_speed, series.max_speed, color="tab:blue", alpha=0.15,
+                          linewidth=0, label="min-max")  # fmt: skip
+    speed_ax.plot(t, series.mean_speed, color="tab:blue", linewidth=1.2, label="mean")
+    speed_ax.set_ylabel("Speed [m/s]")
+    speed_ax.legend(loc="best", fontsize="small")
+    density_ax.plot(t, series.density, color="tab:purple", linewidth=1.2)
+    density_ax.set_ylabel("Density [veh/km]")
+    if flow.start.size:
+        width = np.where(flow.covered > 0, flow.covered, 1.0)
+        flow_ax.bar(flow.start, np.nan_to_num(flow.rate), width=width, align="edge",
+                    color="tab:green", alpha=0.7, edgecolor="darkgreen")  # fmt: skip
+    flow_ax.set_ylabel("Outflow [veh/h]")
+    flow_ax.set_xlabel("Time [s]")
+    for ax in (speed_ax, density_ax, flow_ax):
+        ax.grid(alpha=0.3)
+    road = "the whole network" if series.road == "network" else series.road
+    fig.suptitle(
+        f"Traffic on {road} - {run_label(log)}\n(density: cars per km, all lanes; outflow: "
+        "cars leaving the network per minute, as veh/h)",
+        fontsize="medium",
+    )
     return _save(fig, out_png)

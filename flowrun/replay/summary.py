@@ -43,6 +43,10 @@ class ReplaySummary:
         episode_return: sum of the finite rewards, per RL step (``None`` when none is finite).
         salvaged: whether the log was damaged and read up to the damage.
         recovered_bytes: bytes of the file that were usable.
+        departed: vehicles that entered the network over the logged steps (inflows).
+        arrived: vehicles that left the network over the logged steps.
+        outflow: ``arrived`` per hour of ``duration_s``, veh/h (``nan`` for an empty log).
+        open_network: whether cars may enter and leave (not a ring): shows the three above.
     """
 
     name: str
@@ -65,6 +69,10 @@ class ReplaySummary:
     episode_return: float | None
     salvaged: bool
     recovered_bytes: int
+    departed: int = 0
+    arrived: int = 0
+    outflow: float = math.nan
+    open_network: bool = False
 
 
 def run_label(log: McapLog) -> str:
@@ -125,6 +133,9 @@ def summarize(
     last = float(s.times[-1]) if n else math.nan
     interval = float(np.median(np.diff(s.times))) if n > 1 else 0.0
     has_speed = s.count > 0
+    duration = (last - first + interval) if n else 0.0
+    departed = sum(st.departed for st in stats)
+    arrived = sum(st.arrived for st in stats)
     return ReplaySummary(
         name=run_label(log),
         config_name=meta.get("config_name", ""),
@@ -132,7 +143,7 @@ def summarize(
         versions={k: v for k, v in meta.items() if k.endswith("_version")},
         first_time=first,
         last_time=last,
-        duration_s=(last - first + interval) if n else 0.0,
+        duration_s=duration,
         logged_steps=n,
         sim_steps=int(s.steps[-1] - s.steps[0] + 1) if n else 0,
         vehicles_by_type=dict(sorted(Counter(s.vehicle_types.values()).items())),
@@ -146,6 +157,10 @@ def summarize(
         episode_return=episode_return,
         salvaged=log.salvaged,
         recovered_bytes=log.recovered_bytes,
+        departed=departed,
+        arrived=arrived,
+        outflow=arrived * 3600.0 / duration if duration > 0 else math.nan,
+        open_network=meta.get("network_closed") == "false" or departed + arrived > 0,
     )
 
 
@@ -181,6 +196,10 @@ def summary_rows(s: ReplaySummary) -> dict[str, str]:
             "return": _num(s.episode_return, "", 3),
         }
     )
+    if s.open_network:
+        rows["vehicles entered"] = str(s.departed)
+        rows["vehicles left"] = str(s.arrived)
+        rows["outflow"] = _num(s.outflow, " veh/h", 0)
     if s.salvaged:
         rows["salvaged"] = f"yes ({s.recovered_bytes} bytes recovered)"
     return rows
@@ -195,6 +214,9 @@ _NUMERIC = {
     "collisions": "collisions",
     "teleports": "teleports",
     "return": "episode_return",
+    "vehicles entered": "departed",
+    "vehicles left": "arrived",
+    "outflow": "outflow",
 }
 
 
