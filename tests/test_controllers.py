@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -329,3 +330,21 @@ def test_noise_std_is_sqrt_dt_times_noise(noise: float, dt: float) -> None:
     diff = noisy - base
     assert abs(diff.mean()) < 0.01 * noise
     assert diff.std() == pytest.approx(math.sqrt(dt) * noise, rel=0.03)
+
+
+def test_lac_lags_towards_its_linear_command_and_keeps_memory_per_vehicle() -> None:
+    from flowrun.controllers import LACController
+
+    lac = LACController(k_1=0.3, k_2=0.4, h=1, tau=0.1)
+    lac.reset(2)
+    inputs = replace(
+        make_inputs([10.0, 10.0], [20.0, np.inf], [12.0, 10.0], dt=0.05), length=np.full(2, 5.0)
+    )
+    # car 0: e_x = 20 - 5 - 1*10 = 5, e_v = 2 -> u = 0.3*5 + 0.4*2 = 2.3; a <- a + 0.5 (u - a)
+    # car 1 has no leader: u = 0, stays at 0
+    first = lac.get_accel(inputs, np.random.default_rng(0))
+    assert first == pytest.approx([1.15, 0.0])
+    second = lac.get_accel(inputs, np.random.default_rng(0))
+    assert second == pytest.approx([1.725, 0.0])
+    lac.reset(2)
+    assert lac.get_accel(inputs, np.random.default_rng(0)) == pytest.approx([1.15, 0.0])

@@ -40,7 +40,7 @@ INF = math.inf
 def test_controller_names_by_kind() -> None:
     accel = controller_names("acceleration")
     assert accel[:3] == ["IDM", "OVM", "LinearOVM"]
-    assert {"BCM", "BandoFTL", "Gipps", "FollowerStopper", "PISaturation"} <= set(accel)
+    assert {"BCM", "BandoFTL", "Gipps", "LAC", "FollowerStopper", "PISaturation"} <= set(accel)
     assert {"RLController", "SimCarFollowingController"} <= set(accel)
     assert controller_names("routing") == ["ContinuousRouter"]
     assert controller_names("lane_change") == ["SimLaneChangeController", "StaticLaneChanger"]

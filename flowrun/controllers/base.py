@@ -45,6 +45,7 @@ class CarFollowingInputs:
             "full throttle" without a leader, and by the ``feasible_accel`` fail-safe.
         max_decel: the vehicle type's maximum deceleration (SUMO ``decel``, positive), m/s^2,
             or ``None`` when unknown.
+        length: the vehicle's length, m, or ``None`` when unknown (Flow's LAC uses it).
     """
 
     speed: FloatArray
@@ -57,6 +58,7 @@ class CarFollowingInputs:
     time: float = 0.0
     max_accel: FloatArray | None = None
     max_decel: FloatArray | None = None
+    length: FloatArray | None = None
 
     @property
     def size(self) -> int:

@@ -471,3 +471,68 @@ class GippsController(AccelerationController):
             inputs.speed, inputs.headway, inputs.leader_speed, inputs.dt,
             v0=self.v0, acc=self.acc, b=self.b, b_l=self.b_l, s0=self.s0, tau=self.tau,
         )  # fmt: skip
+
+
+class LACController(AccelerationController):
+    """Linear adaptive cruise control (Flow's ``LACController``; stateful).
+
+    The commanded acceleration follows a first-order lag of time constant ``tau`` towards
+    ``u = k_1 * e_x + k_2 * e_v``, with the spacing error ``e_x = headway - length - h * v``
+    (Flow subtracts the ego's length from the bumper-to-bumper headway) and the speed error
+    ``e_v = v_lead - v``: ``a <- a + dt * (u - a) / tau``. Without a leader ``u = 0`` (Flow
+    has no such case: it would fail). The vehicle length is 5 m when the kernel gives none.
+
+    Args:
+        k_1: gain on the spacing error, 1/s^2.
+        k_2: gain on the speed error, 1/s.
+        h: desired time gap, s.
+        tau: lag between command and acceleration, s.
+        a: initial acceleration, m/s^2.
+    """
+
+    registered_name = "LAC"
+    aliases = ("LACController",)
+    stateful = True
+
+    def __init__(
+        self,
+        veh_id: str | None = None,
+        car_following_params: Any = None,
+        k_1: float = 0.3,
+        k_2: float = 0.4,
+        h: float = 1,
+        tau: float = 0.1,
+        a: float = 0,
+        time_delay: float = 0.0,
+        noise: float = 0,
+        fail_safe: str | Sequence[str] | None = None,
+        display_warnings: bool = True,
+    ) -> None:
+        super().__init__(
+            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
+            car_following_params=car_following_params, display_warnings=display_warnings,
+        )  # fmt: skip
+        me = type(self).__name__
+        self.k_1 = number(me, "k_1", k_1)
+        self.k_2 = number(me, "k_2", k_2)
+        self.h = number(me, "h", h, low=0)
+        self.tau = number(me, "tau", tau, low=0, strict=True)
+        self.a = number(me, "a", a)
+        self._state = np.zeros(0)
+
+    def reset(self, num_vehicles: int) -> None:
+        """Every vehicle's acceleration starts at ``a``."""
+        self._state = np.full(num_vehicles, self.a)
+
+    def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
+        n = inputs.size
+        if self._state.size != n:
+            self.reset(n)
+        length = inputs.length if inputs.length is not None else np.full(n, 5.0)
+        v = inputs.speed
+        lead = inputs.has_leader
+        e_x = np.where(lead, inputs.headway - length - self.h * v, 0.0)
+        e_v = np.where(lead, inputs.leader_speed - v, 0.0)
+        u = self.k_1 * e_x + self.k_2 * e_v
+        self._state = self._state + inputs.dt * (u - self._state) / self.tau
+        return self._state.copy()

@@ -6,6 +6,7 @@ from flowrun.controllers.car_following import (
     CFMController,
     GippsController,
     IDMController,
+    LACController,
     LinearOVM,
     OVMController,
 )
@@ -17,6 +18,7 @@ __all__ = [
     "CFMController",
     "GippsController",
     "IDMController",
+    "LACController",
     "LinearOVM",
     "OVMController",
     "SimCarFollowingController",

@@ -20,6 +20,7 @@ from flowrun.controllers.car_following import (
     CFMController,
     GippsController,
     IDMController,
+    LACController,
     LinearOVM,
     OVMController,
 )
@@ -56,6 +57,7 @@ _BUILTIN: tuple[type, ...] = (
     CFMController,
     BandoFTLController,
     GippsController,
+    LACController,
     FollowerStopper,
     PISaturation,
     SimCarFollowingController,

@@ -63,6 +63,12 @@ def _speed_limit(env: Any, edge: str) -> float:
         return math.inf
 
 
+def _length(vk: Any, veh_id: str) -> np.ndarray | None:
+    """The vehicle's length (m) if the kernel tells it."""
+    get_length = getattr(vk, "get_length", None)
+    return None if get_length is None else np.array([float(get_length(veh_id))])
+
+
 class VehicleControllerView:
     """One vehicle's acceleration controller, with Flow's ``BaseController`` interface.
 
@@ -148,6 +154,7 @@ class VehicleControllerView:
             time=_sim_time(env),
             max_accel=np.array([self.max_accel]),
             max_decel=np.array([self.max_deaccel]),
+            length=_length(vk, self.veh_id),
         )
 
     def _generator(self, env: Any) -> np.random.Generator:

@@ -407,7 +407,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             return CarFollowingInputs(
                 self.speed, self.headway, self.leader_speed, self.follower_headway,
                 self.follower_speed, self.speed_limit, self.dt, time,
-                self.table.accels, self.table.decels,
+                self.table.accels, self.table.decels, self.table.lengths,
             )  # fmt: skip
         return CarFollowingInputs(
             speed=self.speed[idx],
@@ -420,6 +420,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             time=time,
             max_accel=self.table.accels[idx],
             max_decel=self.table.decels[idx],
+            length=self.table.lengths[idx],
         )
 
 
