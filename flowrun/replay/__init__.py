@@ -11,12 +11,13 @@ from flowrun.replay.analysis import (
 )
 from flowrun.replay.export import CSV_COLUMNS, to_csv
 from flowrun.replay.plots import plot_speeds, plot_time_space, plot_traffic, plot_vehicle_speeds
-from flowrun.replay.route import RouteLayout, layout_for, parse_route, route_layout
+from flowrun.replay.route import NetTopology, RouteLayout, layout_for, parse_route, route_layout
 from flowrun.replay.summary import ReplaySummary, compare, run_label, summarize, summary_rows
 from flowrun.replay.traffic import Outflow, TrafficSeries, outflow, traffic_series
 
 __all__ = [
     "CSV_COLUMNS",
+    "NetTopology",
     "Outflow",
     "ReplaySummary",
     "RouteLayout",
