@@ -10,9 +10,13 @@ from collections.abc import Callable, Collection
 from typing import Any
 
 from flowrun.config.model import ExperimentConfig, TrainConfig
-from flowrun.config.params import (
+from flowrun.config.modes import (
     LANE_CHANGE_MODES,
+    LEGACY_LANE_CHANGE_MODES,
     SPEED_MODES,
+    legacy_lane_change_message,
+)
+from flowrun.config.params import (
     EnvParams,
     InFlow,
     InitialConfig,
@@ -21,12 +25,13 @@ from flowrun.config.params import (
     SumoParams,
     VehicleType,
 )
+from flowrun.config.vtype import LANE_CHANGE_MODELS
 from flowrun.suggest import did_you_mean
 
 Check = Callable[[Any], str | None]
 
 ALGORITHMS = ("PPO", "A2C", "SAC", "TD3", "DDPG", "TRPO")
-SPACINGS = ("uniform", "random")
+SPACINGS = ("uniform", "random", "custom")
 
 
 def positive(hint: str = "") -> Check:
@@ -89,6 +94,12 @@ def _name(value: Any) -> str | None:
     return None
 
 
+def _lane_change_mode(value: Any) -> str | None:
+    if isinstance(value, str) and value in LEGACY_LANE_CHANGE_MODES:
+        return legacy_lane_change_message(value)
+    return one_of("lane_change_mode", LANE_CHANGE_MODES, allow_int=True)(value)
+
+
 def _not_empty(value: Any) -> str | None:
     return None if value is None or value else "must not be empty"
 
@@ -97,6 +108,10 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (ExperimentConfig, "name"): _name,
     (SumoParams, "sim_step"): positive(),
     (SumoParams, "seed"): at_least(0),
+    (SumoParams, "port"): between(0, 65535),
+    (SumoParams, "num_clients"): at_least(1),
+    (SumoParams, "sight_radius"): at_least(0),
+    (SumoParams, "pxpm"): positive(),
     (EnvParams, "horizon"): positive("use .inf for no limit"),
     (EnvParams, "warmup_steps"): at_least(0),
     (EnvParams, "sims_per_step"): at_least(1),
@@ -104,7 +119,6 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (InitialConfig, "spacing"): one_of("spacing", SPACINGS),
     (InitialConfig, "min_gap"): at_least(0),
     (InitialConfig, "perturbation"): at_least(0),
-    (InitialConfig, "bunching"): at_least(0),
     (InitialConfig, "lanes_distribution"): at_least(1, "use .inf for all lanes"),
     (VehicleType, "veh_id"): _not_empty,
     (VehicleType, "num_vehicles"): at_least(0),
@@ -119,9 +133,8 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (SumoCarFollowingParams, "speed_factor"): positive(),
     (SumoCarFollowingParams, "speed_dev"): at_least(0),
     (SumoCarFollowingParams, "length"): positive(),
-    (SumoLaneChangeParams, "lane_change_mode"): one_of(
-        "lane_change_mode", LANE_CHANGE_MODES, allow_int=True
-    ),
+    (SumoLaneChangeParams, "lane_change_mode"): _lane_change_mode,
+    (SumoLaneChangeParams, "model"): one_of("lane-change model", LANE_CHANGE_MODELS),
     (InFlow, "vehs_per_hour"): positive(),
     (InFlow, "probability"): between(0, 1),
     (InFlow, "period"): positive(),

@@ -135,6 +135,12 @@ class Converter:
         for key, raw in data.items():
             at = (*path, key)
             name = accepted.get(key) if isinstance(key, str) else None
+            old_spelling = getattr(cls, "FLOW_KEYWORDS", {})
+            if name is None and key in old_spelling:
+                raise self.loc.error(
+                    f"'{key}' is Flow's old spelling; write '{yaml_key(cls, old_spelling[key])}'",
+                    at,
+                )
             if name is None:
                 preferred = [yaml_key(cls, f) for f in fields]
                 raise self.loc.error(

@@ -13,8 +13,21 @@ from typing import Any
 
 from flowrun.config.convert import NETWORK_KEYS, yaml_key
 from flowrun.config.model import ExperimentConfig, NetworkConfig
-from flowrun.config.params import ControllerSpec, InFlows, VehicleParams
+from flowrun.config.modes import LANE_CHANGE_MODES, SPEED_MODES, mode_name
+from flowrun.config.params import (
+    ControllerSpec,
+    InFlows,
+    SumoCarFollowingParams,
+    SumoLaneChangeParams,
+    VehicleParams,
+)
 from flowrun.config.yamlio import dump_yaml
+
+# Mode fields are stored as SUMO's ints; the YAML says the name where the int has one.
+_MODE_NAMES = {
+    (SumoCarFollowingParams, "speed_mode"): SPEED_MODES,
+    (SumoLaneChangeParams, "lane_change_mode"): LANE_CHANGE_MODES,
+}
 
 
 def config_to_dict(cfg: ExperimentConfig) -> dict[str, Any]:
@@ -34,11 +47,19 @@ def dump_config(cfg: ExperimentConfig) -> str:
 
 
 def _section(obj: Any) -> dict[str, Any]:
-    return {
-        yaml_key(type(obj), f.name): _plain(getattr(obj, f.name))
-        for f in dataclasses.fields(obj)
-        if f.metadata.get("yaml", True)
-    }
+    out = {}
+    for f in dataclasses.fields(obj):
+        if not f.metadata.get("yaml", True):
+            continue
+        value = getattr(obj, f.name)
+        names = _MODE_NAMES.get((type(obj), f.name))
+        out[yaml_key(type(obj), f.name)] = mode_name(value, names) if names else _plain(value)
+    return out
+
+
+def yaml_data(value: Any) -> Any:
+    """Any parameter object (or section of one) as the plain data its YAML holds."""
+    return _plain(value)
 
 
 def _plain(value: Any) -> Any:
@@ -64,10 +85,10 @@ def _network(net: NetworkConfig) -> dict[str, Any]:
     if clash:
         raise ValueError(f"network additional_params may not use the reserved keys {clash}")
     out: dict[str, Any] = {"type": net.type, **copy.deepcopy(params.additional_params)}
-    if params.inflows is not None:
+    if params.inflows is not None and params.inflows.num_flows:
         out["inflows"] = _plain(params.inflows)
     if params.template is not None:
-        out["template"] = params.template
+        out["template"] = copy.deepcopy(params.template)
     if params.osm_path is not None:
         out["osm_path"] = params.osm_path
     return out

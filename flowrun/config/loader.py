@@ -194,7 +194,7 @@ def _check_inflows(cfg: ExperimentConfig, edges: list[str] | None, loc: Location
     inflows = cfg.network.net_params.inflows
     if inflows is None:
         return
-    types = cfg.vehicles.types
+    types = cfg.vehicles.type_names
     for j, flow in enumerate(inflows.get()):
         if flow.veh_type not in types:
             raise loc.error(
