@@ -13,7 +13,7 @@ $(BIN)/python:
 # torch is pinned first so the train extra never pulls a multi-GB CUDA build.
 $(STAMP): $(BIN)/python pyproject.toml
 	$(BIN)/pip install --quiet torch==2.13.0
-	$(BIN)/pip install --quiet -e '.[train,dev]'
+	$(BIN)/pip install --quiet -e '.[train,dev,multiagent]'
 	touch $(STAMP)
 
 install: $(STAMP)

@@ -37,8 +37,32 @@ def _builtin() -> dict[str, type]:
 
 
 def env_names() -> list[str]:
-    """Names a config may use as ``env.class``."""
-    return sorted(_builtin())
+    """Names a config may use as ``env.class`` (the multi-agent ones need PettingZoo)."""
+    from flowrun.multiagent.names import MULTIAGENT_ENVS
+
+    return sorted([*_builtin(), *MULTIAGENT_ENVS])
+
+
+def _multiagent_class(name: str) -> type | None:
+    """A multi-agent env class by name (``None`` for other names), imported on demand."""
+    from flowrun.multiagent.names import INSTALL_HINT, MULTIAGENT_ENVS
+
+    path = MULTIAGENT_ENVS.get(name)
+    if path is None:
+        return None
+    module_name, _, attr = path.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as err:
+        if err.name != "pettingzoo":
+            raise
+        raise ConfigError(
+            f"{name} is a PettingZoo multi-agent environment and PettingZoo is not "
+            f"installed; install it with: {INSTALL_HINT}",
+            path="env.class",
+        ) from None
+    cls: type = getattr(module, attr)
+    return cls
 
 
 def resolve_env_class(name: str | None, search_dir: str | Path | None = None) -> type:
@@ -57,10 +81,13 @@ def resolve_env_class(name: str | None, search_dir: str | Path | None = None) ->
     if name is None:
         name = "AccelEnv"
     builtin = _builtin()
+    multiagent = _multiagent_class(name)
+    if multiagent is not None:
+        return multiagent
     if ":" not in name:
         if name not in builtin:
             raise ConfigError(
-                unknown_name("environment", name, builtin)
+                unknown_name("environment", name, env_names())
                 + ", or an import path 'package.module:Class'",
                 path="env.class",
             )
@@ -147,7 +174,7 @@ def register_envs() -> None:
     """
     from flowrun.envs.defaults import DEFAULT_CONFIGS
 
-    for name in env_names():
+    for name in sorted(_builtin()):  # the multi-agent envs are PettingZoo envs, not Gymnasium's
         env_id = f"flowrun/{name}-v0"
         if env_id in gymnasium.registry:
             continue

@@ -1,0 +1,51 @@
+"""Per-AV observations Flow's multi-agent envs share, read from the kernel's getters."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Bounds of the neighbour 5-vector: speed, relative leader speed, headway, relative follower
+#: speed, tailway (normalised; the same bounds as flowrun's single-agent ``MergePOEnv``).
+NEIGHBOUR_LOW = np.array([0.0, -1.0, 0.0, -1.0, 0.0], dtype=np.float32)
+NEIGHBOUR_HIGH = np.ones(5, dtype=np.float32)
+
+
+def neighbour_obs(vk: Any, veh_id: str, max_speed: float, max_length: float) -> FloatArray:
+    """Flow's 5 values of an AV and its two neighbours (``MultiAgentMergePOEnv``).
+
+    ``[v / V, (v_lead - v) / V, headway / L, (v - v_follow) / V, tailway / L]`` with ``V``
+    the network's max speed (m/s) and ``L`` its length (m). Without a leader
+    ``v_lead = V`` and ``headway = L``; without a follower ``v_follow = 0`` and
+    ``tailway = L``. Gaps are bumper to bumper (the kernel's headway and tailway, which also
+    hold across junctions, where Flow's ``x_lead - x - length`` does not).
+
+    Args:
+        vk: the vehicle kernel (``env.k.vehicle``).
+        veh_id: the AV.
+        max_speed: normaliser of speeds, m/s.
+        max_length: normaliser of gaps, m.
+    """
+    speed = float(vk.get_speed(veh_id))
+    lead, follow = vk.get_leader(veh_id), vk.get_follower(veh_id)
+    if lead:
+        lead_speed, headway = float(vk.get_speed(lead)), float(vk.get_headway(veh_id))
+    else:
+        lead_speed, headway = max_speed, max_length
+    if follow:
+        follow_speed, tailway = float(vk.get_speed(follow)), float(vk.get_tailway(veh_id))
+    else:
+        follow_speed, tailway = 0.0, max_length
+    return np.array(
+        [
+            speed / max_speed,
+            (lead_speed - speed) / max_speed,
+            headway / max_length,
+            (speed - follow_speed) / max_speed,
+            tailway / max_length,
+        ]
+    )
