@@ -9,7 +9,8 @@ from typing import Annotated
 import typer
 
 from flowrun.cli.common import guarded
-from flowrun.config import dump_config, load_config
+from flowrun.config import dump_config
+from flowrun.config.flow_module import load_any_config
 from flowrun.errors import ConfigError
 from flowrun.suggest import unknown_name
 
@@ -39,7 +40,13 @@ def register(app: typer.Typer) -> None:
     @app.command("validate")
     @guarded
     def validate(
-        config: Annotated[Path, typer.Argument(help="Experiment config (YAML).")],
+        config: Annotated[
+            Path,
+            typer.Argument(
+                help="Experiment config (YAML), or a Flow config module (.py defining "
+                "flow_params)."
+            ),
+        ],
         overrides: Annotated[
             list[str] | None,
             typer.Option(
@@ -49,8 +56,11 @@ def register(app: typer.Typer) -> None:
             ),
         ] = None,
     ) -> None:
-        """Load and validate CONFIG, then print the resolved config (every setting) as YAML."""
-        cfg = load_config(config, overrides or ())
+        """Load and validate CONFIG, then print the resolved config (every setting) as YAML.
+
+        CONFIG is a YAML file or a Flow config module (a .py file defining flow_params).
+        """
+        cfg = load_any_config(config, overrides or ())
         typer.echo(dump_config(cfg), nl=False)
 
     @app.command("list")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -18,7 +19,7 @@ from rich.progress import (
 from rich.table import Table
 
 from flowrun.cli.commands_run import (
-    ConfigArg,
+    AnyConfigArg,
     OutOpt,
     SeedOpt,
     SetOpt,
@@ -41,7 +42,7 @@ def _progress_bar(*columns: Any) -> Progress:
 
 @guarded
 def train(
-    config: ConfigArg,
+    config: AnyConfigArg,
     set_: SetOpt = None,
     seed: SeedOpt = None,
     out: OutOpt = Path("runs"),
@@ -52,10 +53,13 @@ def train(
 ) -> None:
     """Train the config's policy (train: section) with stable-baselines3, then evaluate it.
 
-    With --resume, the run folder's saved config is used (plus --set, e.g. a larger
-    train.total_timesteps) and training continues from its last checkpoint.
+    CONFIG is a YAML file or a Flow config module (a .py file defining flow_params; without
+    a train: section it trains PPO with flowrun's defaults). With --resume, the run folder's
+    saved config is used (plus --set, e.g. a larger train.total_timesteps) and training
+    continues from its last checkpoint.
     """
-    from flowrun.config.loader import load_config
+    from flowrun.config.flow_module import is_flow_module, load_any_config
+    from flowrun.config.model import TrainConfig
     from flowrun.training.deps import require
     from flowrun.training.trainer import resume_config
     from flowrun.training.trainer import train as run_training
@@ -68,7 +72,13 @@ def train(
         cfg = resume_config(resume, overrides)
         console.print(f"resuming {resume} with its config.yaml (CONFIG is not re-read)")
     else:
-        cfg = load_config(config, overrides)
+        cfg = load_any_config(config, overrides)
+        if cfg.train is None and is_flow_module(config):
+            cfg = replace(cfg, train=TrainConfig())
+            console.print(
+                "a Flow config has no train: section: training PPO with flowrun's defaults "
+                "(change them with --set train.total_timesteps=... etc.)"
+            )
     columns = (TextColumn("training"), BarColumn(), MofNCompleteColumn(),
                TextColumn("mean reward {task.fields[reward]}"), TimeElapsedColumn(),
                TimeRemainingColumn())
