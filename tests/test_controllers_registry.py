@@ -42,9 +42,9 @@ def test_controller_names_by_kind() -> None:
     assert accel[:3] == ["IDM", "OVM", "LinearOVM"]
     assert {"BCM", "BandoFTL", "Gipps", "LAC", "FollowerStopper", "PISaturation"} <= set(accel)
     assert {"RLController", "SimCarFollowingController"} <= set(accel)
-    assert controller_names("routing") == ["ContinuousRouter"]
+    assert controller_names("routing") == ["ContinuousRouter", "GridRouter"]
     assert controller_names("lane_change") == ["SimLaneChangeController", "StaticLaneChanger"]
-    assert controller_names() == [*accel, "ContinuousRouter", *controller_names("lane_change")]
+    assert controller_names() == [*accel, "ContinuousRouter", "GridRouter", *controller_names("lane_change")]
 
 
 def test_short_names_class_names_and_aliases_resolve_to_the_same_class() -> None:

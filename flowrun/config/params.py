@@ -20,6 +20,7 @@ from flowrun.config.inflows import InFlow as InFlow
 from flowrun.config.inflows import InFlows as InFlows
 from flowrun.config.modes import LANE_CHANGE_MODES as LANE_CHANGE_MODES
 from flowrun.config.modes import SPEED_MODES as SPEED_MODES
+from flowrun.config.traffic_lights import TrafficLightParams as TrafficLightParams
 from flowrun.config.vehicles import ControllerArg as ControllerArg
 from flowrun.config.vehicles import ControllerSpec as ControllerSpec
 from flowrun.config.vehicles import VehicleParams as VehicleParams
@@ -181,19 +182,3 @@ class InitialConfig:
     def get_additional_params(self, key: str) -> Any:
         """``additional_params[key]`` (Flow's accessor)."""
         return self.additional_params[key]
-
-
-class TrafficLightParams:
-    """Traffic lights (Flow's ``TrafficLightParams``); kept as data for networks that use them."""
-
-    def __init__(self, baseline: bool = False) -> None:
-        self.baseline = baseline
-        self.lights: dict[str, dict[str, Any]] = {}
-
-    def add(self, node_id: str, **kwargs: Any) -> None:
-        """Describe the traffic light at ``node_id`` (phases, programID, tls_type, ...)."""
-        self.lights[node_id] = dict(kwargs)
-
-    def get_properties(self) -> dict[str, dict[str, Any]]:
-        """All traffic lights by node id."""
-        return dict(self.lights)

@@ -42,7 +42,7 @@ from flowrun.controllers.registry import (
     resolve_controller,
 )
 from flowrun.controllers.rl import RLController, SimCarFollowingController
-from flowrun.controllers.routing import ContinuousRouter, Router, needs_new_route
+from flowrun.controllers.routing import ContinuousRouter, GridRouter, Router, needs_new_route
 from flowrun.controllers.velocity import (
     FollowerStopper,
     PISaturation,
@@ -68,6 +68,7 @@ __all__ = [
     "ContinuousRouter",
     "FollowerStopper",
     "GippsController",
+    "GridRouter",
     "IDMController",
     "LACController",
     "LaneChangeController",

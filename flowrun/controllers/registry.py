@@ -30,7 +30,7 @@ from flowrun.controllers.lane_change import (
     StaticLaneChanger,
 )
 from flowrun.controllers.rl import RLController, SimCarFollowingController
-from flowrun.controllers.routing import ContinuousRouter, Router
+from flowrun.controllers.routing import ContinuousRouter, GridRouter, Router
 from flowrun.controllers.velocity import FollowerStopper, PISaturation
 from flowrun.errors import ConfigError
 from flowrun.suggest import did_you_mean, unknown_name
@@ -63,6 +63,7 @@ _BUILTIN: tuple[type, ...] = (
     SimCarFollowingController,
     RLController,
     ContinuousRouter,
+    GridRouter,
     SimLaneChangeController,
     StaticLaneChanger,
 )

@@ -89,3 +89,20 @@ class ContinuousRouter(Router):
         if not choices:
             return None
         return pick_route(choices, rng)
+
+
+class GridRouter(Router):
+    """Flow's router of the traffic-light grid: cars drive straight through.
+
+    Flow's ``GridRouter`` gives a car on its route's last edge the route ``[that edge]``,
+    i.e. it keeps its route and leaves the grid at the end of its row or column. The grid's
+    routes already run straight through, so nothing is ever rerouted.
+    """
+
+    registered_name = "GridRouter"
+
+    def choose_route(
+        self, current_edge: str, choices: Sequence[RouteChoice], rng: np.random.Generator
+    ) -> list[str] | None:
+        """``None``: the car keeps its (straight-through) route."""
+        return None

@@ -15,10 +15,12 @@ from flowrun.kernel.network import NetworkKernel
 from flowrun.kernel.population import VehicleTable
 from flowrun.kernel.simulation import SimulationKernel
 from flowrun.kernel.sumo import SumoFiles, SumoProcess
+from flowrun.kernel.traffic_light import TrafficLightKernel
 from flowrun.kernel.vehicle import VehicleKernel
 from flowrun.networks.base import Network
 from flowrun.networks.build import build_network
 from flowrun.networks.routes import route_name, routes_xml
+from flowrun.networks.tls import write_tls_file
 
 log = logging.getLogger(__name__)
 
@@ -40,6 +42,7 @@ class Kernel:
         self.vehicle: VehicleKernel
         self.network: NetworkKernel
         self.simulation = SimulationKernel(sim_params.sim_step)
+        self.traffic_light = TrafficLightKernel()
         self.net_file: Path | None = None
 
     @property
@@ -67,8 +70,10 @@ class Kernel:
         routes = self.work_dir / f"{self.net_file.stem.removesuffix('.net')}.rou.xml"
         routes.write_text(routes_xml(spec, network.vehicles, network.net_params.inflows))
         extra = tuple(Path(f) for f in spec.extra_files)  # a template's own vTypes and routes
+        tls_file = write_tls_file(network.traffic_lights, self.net_file, self.work_dir)
+        tls = () if tls_file is None else (tls_file,)
         self.process = SumoProcess(
-            SumoFiles(self.net_file, routes, extra), self.sim_params, self.gui
+            SumoFiles(self.net_file, routes, extra, tls), self.sim_params, self.gui
         )
         api = self.process.start()
         try:
@@ -82,6 +87,7 @@ class Kernel:
         self.vehicle.read_xy = read_xy
         self.vehicle.attach(api, lanes)
         self.simulation.attach(api)
+        self.traffic_light.attach(api)
         self.simulation.before_step = self.vehicle.send_commands
         self.vehicle.update(first=True)
 
@@ -114,10 +120,12 @@ class Kernel:
         """Send buffered commands, advance one step, read the new state."""
         self.simulation.simulation_step()
         self.vehicle.update()
+        self.traffic_light.update()
 
     def update(self, reset: bool = False) -> None:
         """Read the new state after a ``simulation_step`` (Flow's ``k.update(reset)``)."""
         self.vehicle.update(reset)
+        self.traffic_light.update()
 
     def close(self) -> None:
         """Stop SUMO (safe to call twice)."""

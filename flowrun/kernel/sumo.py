@@ -31,6 +31,7 @@ class SumoFiles:
     net: Path
     routes: Path
     extra_routes: tuple[Path, ...] = ()
+    additional: tuple[Path, ...] = ()  # e.g. signal programs (networks/tls.py)
 
 
 def sumo_command(files: SumoFiles, params: SumoParams, gui: bool) -> list[str]:
@@ -65,6 +66,8 @@ def sumo_command(files: SumoFiles, params: SumoParams, gui: bool) -> list[str]:
         "--begin",
         "0",
     ]
+    if files.additional:
+        cmd += ["--additional-files", ",".join(str(f) for f in files.additional)]
     if not params.print_warnings:
         cmd += ["--no-warnings", "true"]
     if params.use_ballistic:

@@ -12,6 +12,7 @@ from flowrun.networks.highway import HighwayNetwork
 from flowrun.networks.merge import MergeNetwork
 from flowrun.networks.ring import RingNetwork, check_ring_fits
 from flowrun.networks.template import TemplateNetwork
+from flowrun.networks.traffic_light_grid import TrafficLightGridNetwork
 from flowrun.suggest import unknown_name
 
 NETWORKS: dict[str, type[Network]] = {
@@ -20,6 +21,7 @@ NETWORKS: dict[str, type[Network]] = {
     "merge": MergeNetwork,
     "highway": HighwayNetwork,
     "template": TemplateNetwork,
+    "traffic_light_grid": TrafficLightGridNetwork,
 }
 _ALIASES = {
     "loop": "ring",
@@ -35,6 +37,10 @@ _ALIASES = {
     "HighwayScenario": "highway",
     "TemplateNetwork": "template",
     "Network": "template",
+    "grid": "traffic_light_grid",
+    "TrafficLightGridNetwork": "traffic_light_grid",
+    "TrafficLightGridScenario": "traffic_light_grid",
+    "SimpleGridScenario": "traffic_light_grid",
 }
 
 
