@@ -54,7 +54,9 @@ def ring_x(env: Env, veh_id: str) -> float:
 
 
 def test_every_builtin_env_is_registered_with_gymnasium():
-    assert env_names() == BUILTIN
+    from flowrun.multiagent.names import MULTIAGENT_ENVS  # PettingZoo envs: not Gymnasium's
+
+    assert env_names() == sorted([*BUILTIN, *MULTIAGENT_ENVS])
     for name in BUILTIN:
         assert f"flowrun/{name}-v0" in gymnasium.registry
 

@@ -21,8 +21,9 @@ def neighbour_obs(vk: Any, veh_id: str, max_speed: float, max_length: float) -> 
     ``[v / V, (v_lead - v) / V, headway / L, (v - v_follow) / V, tailway / L]`` with ``V``
     the network's max speed (m/s) and ``L`` its length (m). Without a leader
     ``v_lead = V`` and ``headway = L``; without a follower ``v_follow = 0`` and
-    ``tailway = L``. Gaps are bumper to bumper (the kernel's headway and tailway, which also
-    hold across junctions, where Flow's ``x_lead - x - length`` does not).
+    ``tailway = L``. Gaps are bumper to bumper: the AV's headway (the kernel's, which also
+    holds across junctions, where Flow's ``x_lead - x - length`` does not) and, as Flow, the
+    follower's headway as the tailway.
 
     Args:
         vk: the vehicle kernel (``env.k.vehicle``).
@@ -37,7 +38,7 @@ def neighbour_obs(vk: Any, veh_id: str, max_speed: float, max_length: float) -> 
     else:
         lead_speed, headway = max_speed, max_length
     if follow:
-        follow_speed, tailway = float(vk.get_speed(follow)), float(vk.get_tailway(veh_id))
+        follow_speed, tailway = float(vk.get_speed(follow)), float(vk.get_headway(follow))
     else:
         follow_speed, tailway = 0.0, max_length
     return np.array(

@@ -1,0 +1,253 @@
+"""Multi-agent envs on real SUMO (short, seeded): PettingZoo's parallel API test for each,
+seeded determinism, AVs entering and leaving the merge, actions applied, Flow's observations
+and rewards recomputed from the kernel's getters."""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pettingzoo")
+
+from pettingzoo.test import parallel_api_test
+
+from flowrun.config.loader import load_config
+from flowrun.envs.factory import make_env
+from flowrun.envs.rewards import desired_velocity
+
+pytestmark = pytest.mark.sumo
+
+CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+
+RING = ("multiagent_ring", "env.horizon=40", "env.warmup_steps=20")
+ACCEL = (*RING, "env.class=MultiAgentAccelPOEnv", "env.additional_params.target_velocity=20")
+#: the first AV (flow_1.0) is in the network at reset (it enters at 6 s; a warm-up step is
+#: one 0.5 s simulation step); the first
+#: AVs leave after about 60 steps
+MERGE = ("multiagent_merge", "env.horizon=120", "env.warmup_steps=14")
+
+HIGHWAY_YAML = """\
+name: multiagent_highway
+sim: {step: 0.5, seed: 0}
+env:
+  class: MultiAgentHighwayPOEnv
+  horizon: 120
+  warmup_steps: 4
+  additional_params: {max_accel: 1, max_decel: 1, target_velocity: 25}
+network:
+  type: highway
+  length: 600
+  lanes: 2
+  speed_limit: 30
+  num_edges: 2
+  inflows:
+    - {edge: highway_0, veh_type: human, vehs_per_hour: 1500, depart_lane: free, depart_speed: 10}
+    - {edge: highway_0, veh_type: rl, vehs_per_hour: 300, depart_lane: free, depart_speed: 10}
+vehicles:
+  - {id: human, count: 0, acceleration_controller: {type: IDM}}
+  - {id: rl, count: 0, acceleration_controller: {type: RLController}}
+"""
+
+
+@contextmanager
+def env_of(name: str, *overrides: str, tmp: Path | None = None) -> Iterator[Any]:
+    """The env of ``configs/<name>.yaml`` (or the highway YAML), closed afterwards."""
+    if name == "highway":
+        assert tmp is not None
+        path = tmp / "multiagent_highway.yaml"
+        path.write_text(HIGHWAY_YAML)
+    else:
+        path = CONFIGS / f"{name}.yaml"
+    env = make_env(load_config(path, list(overrides)))
+    try:
+        yield env
+    finally:
+        env.close()
+
+
+def seeded_actions(env: Any, rng: np.random.Generator) -> dict[str, Any]:
+    """One action per live agent from ``rng`` (in the action space)."""
+    out = {}
+    for a in env.agents:
+        space = env.action_space(a)
+        out[a] = rng.uniform(space.low, space.high).astype(np.float32)
+    return out
+
+
+# ------------------------------------------------------------------ PettingZoo's API test
+@pytest.mark.parametrize("spec", [RING, ACCEL, MERGE, ("highway",)], ids=lambda s: s[0])
+def test_parallel_api_test_passes(spec: tuple[str, ...], tmp_path: Path) -> None:
+    with env_of(*spec, tmp=tmp_path) as env, warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        env.reset(seed=0)
+        assert env.agents  # else the API test stops at once
+        parallel_api_test(env, num_cycles=200)
+        assert env.episode_over
+    # the only warning allowed: ids the inflows could still produce never showed up
+    messages = {str(w.message) for w in caught if "pettingzoo" in w.filename}
+    assert messages <= {"No agents present but not all possible_agents are terminated or truncated"}
+
+
+# ------------------------------------------------------------------ determinism
+def rollout(spec: tuple[str, ...], seed: int, steps: int) -> list[Any]:
+    rng = np.random.default_rng(7)
+    with env_of(*spec) as env:
+        obs, _ = env.reset(seed=seed)
+        trace: list[Any] = [sorted((a, o.tolist()) for a, o in obs.items())]
+        for _ in range(steps):
+            obs, rew, term, trunc, _ = env.step(seeded_actions(env, rng))
+            trace.append((sorted((a, o.tolist()) for a, o in obs.items()), sorted(rew.items()),
+                          sorted(term.items()), sorted(trunc.items())))  # fmt: skip
+        return trace
+
+
+@pytest.mark.parametrize("spec", [RING, MERGE], ids=lambda s: s[0])
+def test_same_seed_same_episode(spec: tuple[str, ...]) -> None:
+    first = rollout(spec, seed=3, steps=30)
+    assert any(step[0] for step in first[1:])  # agents acted
+    assert rollout(spec, seed=3, steps=30) == first
+
+
+def test_other_seed_other_ring_episode() -> None:
+    # the ring's noisy drivers and redrawn length follow the seed (the merge has no randomness)
+    assert rollout(RING, seed=4, steps=10) != rollout(RING, seed=3, steps=10)
+
+
+# ------------------------------------------------------------------ agents on the merge
+def test_merge_agents_enter_and_leave_as_pettingzoo_specifies() -> None:
+    with env_of("multiagent_merge", "env.horizon=300") as env:
+        obs, infos = env.reset(seed=0)
+        assert env.agents == [] and obs == {} and infos == {}  # no AV before the first inflow
+        seen: set[str] = set()
+        gone: set[str] = set()
+        entered_at: dict[str, int] = {}
+        while not env.episode_over:
+            before = list(env.agents)
+            obs, rew, term, trunc, _ = env.step({a: np.array([0.5]) for a in env.agents})
+            assert set(obs) == set(rew) == set(term) == set(trunc) == set(before) | set(env.agents)
+            for a in set(obs) - set(before):
+                entered_at[a] = env.step_counter
+                assert not term[a] and a in env.agents
+            for a in [a for a in obs if term[a] and not env.episode_over]:
+                gone.add(a)
+                assert a not in env.agents
+                assert rew[a] == 0.0 and not obs[a].any()  # Flow: zero obs and reward
+            assert not gone & set(env.agents)  # never revived
+            assert env.agents == [v for v in env.k.vehicle.get_rl_ids() if v not in gone] or (
+                env.episode_over and env.agents == []
+            )
+            seen |= set(obs)
+        assert len(gone) >= 2 and len(entered_at) >= 5
+        assert seen <= set(env.possible_agents)
+        assert all(trunc[a] for a in env.possible_agents if a in obs and not term[a])
+
+
+def test_merge_possible_agents_cover_a_whole_episode() -> None:
+    with env_of("multiagent_merge") as env:
+        env.reset(seed=0)
+        seen: set[str] = set()
+        while not env.episode_over:
+            env.step({})
+            seen |= set(env.agents)
+        rl_seen = {v for v in env.k.vehicle.get_rl_ids()} | seen
+    assert rl_seen <= set(env.possible_agents)
+    # 200 veh/h from t=1 s: 42 scheduled by 750 s (+1 for rounding); the jam delays some
+    assert len(env.possible_agents) == 43 and len(seen) >= 30
+
+
+def test_merge_actions_are_applied_and_clipped() -> None:
+    # Flow's MultiAgentMergePOEnv never applied its actions (it looped over enumerate pairs)
+    with env_of(*MERGE) as env:
+        env.reset(seed=0)
+        for _ in range(20):
+            env.step({a: np.zeros(1) for a in env.agents})
+        vk = env.k.vehicle
+        agents = list(env.agents)
+        assert len(agents) >= 2
+        calls: list[tuple[list[str], list[float]]] = []
+        apply = vk.apply_acceleration
+
+        def spy(ids: Any, accs: Any) -> None:
+            calls.append((list(ids), np.asarray(accs, dtype=float).tolist()))
+            apply(ids, accs)
+
+        vk.apply_acceleration = spy
+        env.step({agents[0]: np.array([-1.0]), agents[1]: np.array([9.0])})
+        # once per simulation step (2 per env step); 9 clipped to max_accel 1.5
+        assert calls == [([agents[0], agents[1]], [-1.0, 1.5])] * 2
+
+
+# ------------------------------------------------------------------ Flow's obs and rewards
+def test_ring_wave_observation_and_shared_reward_match_flow() -> None:
+    with env_of(*RING) as env:
+        env.reset(seed=0)
+        obs, rew, *_ = env.step({"rl_0": np.array([0.5]), "rl_1": np.array([-0.25])})
+        vk = env.k.vehicle
+        for a in ("rl_0", "rl_1"):
+            lead = vk.get_leader(a)
+            v, v_lead, h = vk.get_speed(a), vk.get_speed(lead), vk.get_headway(a)
+            assert obs[a] == pytest.approx([v / 15, (v_lead - v) / 15, h / 270], abs=1e-6)
+        # 4 * mean(v) / 20 - 4 * mean(|0.5|, |-0.25|)
+        expected = 4 * float(np.mean(vk.speed)) / 20 - 4 * 0.375
+        assert rew == {"rl_0": pytest.approx(expected), "rl_1": pytest.approx(expected)}
+
+
+def test_ring_accel_observation_and_shared_reward_match_flow() -> None:
+    with env_of(*ACCEL) as env:
+        env.reset(seed=0)
+        obs, rew, *_ = env.step({"rl_0": np.array([0.2])})
+        vk, net = env.k.vehicle, env.k.network
+        v_max, length = net.max_speed(), net.length()
+        a = "rl_1"
+        v = vk.get_speed(a)
+        lead, follow = vk.get_leader(a), vk.get_follower(a)
+        expected_obs = [
+            vk.get_x_by_id(a) / length,
+            v / v_max,
+            (vk.get_speed(lead) - v) / v_max,
+            vk.get_headway(a) / length,
+            (v - vk.get_speed(follow)) / v_max,
+            vk.get_headway(follow) / length,  # Flow: the follower's headway
+        ]
+        assert obs[a] == pytest.approx(expected_obs, abs=1e-6)
+        target = np.full(vk.speed.size, 20.0)
+        by_hand = max(np.linalg.norm(target) - np.linalg.norm(vk.speed - target), 0) / (
+            np.linalg.norm(target)
+        )
+        assert rew["rl_0"] == rew["rl_1"] == pytest.approx(by_hand, rel=1e-6)
+
+
+def test_merge_shared_reward_matches_flow() -> None:
+    with env_of(*MERGE) as env:
+        env.reset(seed=0)
+        for _ in range(30):
+            _, rew, *_ = env.step({a: np.array([0.3]) for a in env.agents})
+        vk = env.k.vehicle
+        penalty = 0.0
+        for a in vk.get_rl_ids():
+            if vk.get_leader(a) and vk.get_speed(a) > 0:
+                penalty += min((max(vk.get_headway(a) / vk.get_speed(a), 0) - 1) / 1, 0)
+        expected = max(desired_velocity(vk.speed, 20.0) + 0.1 * penalty, 0.0)
+        live = [a for a in rew if a in env.agents]
+        assert live and all(rew[a] == pytest.approx(expected) for a in live)
+
+
+def test_highway_reward_is_per_agent_as_flow(tmp_path: Path) -> None:
+    with env_of("highway", tmp=tmp_path) as env:
+        env.reset(seed=0)
+        for _ in range(40):
+            _, rew, *_ = env.step({a: np.array([0.0]) for a in env.agents})
+        vk = env.k.vehicle
+        r_v = desired_velocity(vk.speed, 25.0)
+        assert len(env.agents) >= 2
+        for a in env.agents:
+            v, penalty = vk.get_speed(a), 0.0
+            if vk.get_leader(a) and v > 0:
+                penalty = min(max(vk.get_headway(a) / v, 0) - 1, 0)
+            assert rew[a] == pytest.approx(max(r_v + 0.1 * penalty, 0.0))
