@@ -22,11 +22,6 @@ def _builtin() -> dict[str, type]:
     from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
     from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
     from flowrun.envs.test import TestEnv
-    from flowrun.envs.traffic_light_grid import (
-        TrafficLightGridBenchmarkEnv,
-        TrafficLightGridEnv,
-        TrafficLightGridPOEnv,
-    )
 
     return {
         c.__name__: c
@@ -37,9 +32,6 @@ def _builtin() -> dict[str, type]:
             LaneChangeAccelEnv,
             MergePOEnv,
             TestEnv,
-            TrafficLightGridEnv,
-            TrafficLightGridPOEnv,
-            TrafficLightGridBenchmarkEnv,
         )
     }
 
