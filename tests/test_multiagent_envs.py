@@ -251,3 +251,40 @@ def test_highway_reward_is_per_agent_as_flow(tmp_path: Path) -> None:
             if vk.get_leader(a) and v > 0:
                 penalty = min(max(vk.get_headway(a) / v, 0) - 1, 0)
             assert rew[a] == pytest.approx(max(r_v + 0.1 * penalty, 0.0))
+
+
+# ------------------------------------------------------------------ Flow's Python API
+def test_flow_params_with_a_multiagent_env_class_build_the_env() -> None:
+    from flowrun.controllers import ContinuousRouter, IDMController, RLController
+    from flowrun.core.params import EnvParams, InitialConfig, NetParams, SumoParams
+    from flowrun.core.params import VehicleParams as FlowVehicles
+    from flowrun.envs.multiagent import MultiAgentWaveAttenuationPOEnv
+    from flowrun.networks.ring import ADDITIONAL_NET_PARAMS, RingNetwork
+    from flowrun.utils.registry import make_create_env
+
+    vehicles = FlowVehicles()
+    vehicles.add(veh_id="human", acceleration_controller=(IDMController, {"noise": 0.2}),
+                 routing_controller=(ContinuousRouter, {}), num_vehicles=20)  # fmt: skip
+    vehicles.add(veh_id="rl", acceleration_controller=(RLController, {}),
+                 routing_controller=(ContinuousRouter, {}), num_vehicles=2)  # fmt: skip
+    flow_params = dict(
+        exp_tag="multiagent_ring",
+        env_name=MultiAgentWaveAttenuationPOEnv,
+        network=RingNetwork,
+        simulator="traci",
+        sim=SumoParams(sim_step=0.1, render=False),
+        env=EnvParams(horizon=20, warmup_steps=10,
+                      additional_params={"max_accel": 1, "max_decel": 1,
+                                         "ring_length": [220, 270]}),  # fmt: skip
+        net=NetParams(additional_params=ADDITIONAL_NET_PARAMS.copy()),
+        veh=vehicles,
+        initial=InitialConfig(bunching=20),
+    )
+    create_env, _ = make_create_env(flow_params)
+    env = create_env()
+    try:
+        assert isinstance(env, MultiAgentWaveAttenuationPOEnv)
+        obs, _ = env.reset(seed=0)
+        assert env.possible_agents == env.agents == ["rl_0", "rl_1"] == sorted(obs)
+    finally:
+        env.close()
