@@ -273,9 +273,11 @@ def test_flow_params_with_a_multiagent_env_class_build_the_env() -> None:
         network=RingNetwork,
         simulator="traci",
         sim=SumoParams(sim_step=0.1, render=False),
-        env=EnvParams(horizon=20, warmup_steps=10,
-                      additional_params={"max_accel": 1, "max_decel": 1,
-                                         "ring_length": [220, 270]}),  # fmt: skip
+        env=EnvParams(
+            horizon=20,
+            warmup_steps=10,
+            additional_params={"max_accel": 1, "max_decel": 1, "ring_length": [220, 270]},
+        ),
         net=NetParams(additional_params=ADDITIONAL_NET_PARAMS.copy()),
         veh=vehicles,
         initial=InitialConfig(bunching=20),
