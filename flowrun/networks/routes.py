@@ -6,6 +6,7 @@ from typing import Any
 from xml.sax.saxutils import quoteattr
 
 from flowrun.config.params import VehicleParams
+from flowrun.config.vtype import vtype_attributes
 from flowrun.networks.base import NetworkSpec
 
 
@@ -14,18 +15,11 @@ def routes_xml(spec: NetworkSpec, vehicles: VehicleParams, net_inflows: Any = No
     (and of each route choice), and a ``<flow>`` per inflow (``NetParams.inflows``)."""
     rows = ["<routes>"]
     for g in vehicles.groups:
-        cf, lc = g.car_following_params, g.lane_change_params
-        color = f" color={quoteattr(g.color)}" if g.color else ""
-        rows.append(
-            f'    <vType id={quoteattr(g.veh_id)} length="{cf.length}" minGap="{cf.min_gap}" '
-            f'maxSpeed="{cf.max_speed}" accel="{cf.accel}" decel="{cf.decel}" '
-            f'sigma="{cf.sigma}" tau="{cf.tau}" speedFactor="{cf.speed_factor}" '
-            f'speedDev="{cf.speed_dev}" impatience="{cf.impatience}" '
-            f"carFollowModel={quoteattr(cf.car_follow_model)} "
-            f'laneChangeModel={quoteattr(lc.model)} lcStrategic="{lc.lc_strategic}" '
-            f'lcCooperative="{lc.lc_cooperative}" lcSpeedGain="{lc.lc_speed_gain}" '
-            f'lcKeepRight="{lc.lc_keep_right}"{color}/>'
-        )
+        attrs = {"id": g.veh_id, **vtype_attributes(g.car_following_params, g.lane_change_params)}
+        if g.color:
+            attrs["color"] = g.color
+        text = " ".join(f"{k}={quoteattr(v)}" for k, v in attrs.items())
+        rows.append(f"    <vType {text}/>")
     starts = list(spec.routes) + [e for e in spec.route_choices if e not in spec.routes]
     for start in starts:
         choices = spec.choices(start)
