@@ -81,7 +81,9 @@ def seeded_actions(env: Any, rng: np.random.Generator) -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------ PettingZoo's API test
-@pytest.mark.parametrize("spec", [RING, ACCEL, MERGE, ("highway",)], ids=lambda s: s[0])
+@pytest.mark.parametrize(
+    "spec", [RING, ACCEL, MERGE, ("highway",)], ids=["wave_ring", "accel_ring", "merge", "highway"]
+)
 def test_parallel_api_test_passes(spec: tuple[str, ...], tmp_path: Path) -> None:
     with env_of(*spec, tmp=tmp_path) as env, warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -290,3 +292,17 @@ def test_flow_params_with_a_multiagent_env_class_build_the_env() -> None:
         assert env.possible_agents == env.agents == ["rl_0", "rl_1"] == sorted(obs)
     finally:
         env.close()
+
+
+def test_step_before_reset_or_for_an_unknown_agent_is_refused() -> None:
+    import gymnasium
+
+    with env_of(*RING) as env:
+        with pytest.raises(gymnasium.error.ResetNeeded):
+            env.step({})
+        env.reset(seed=0)
+        with pytest.raises(KeyError, match="unknown agents"):
+            env.step({"rl_9": np.zeros(1)})
+        # an agent without an action is left to SUMO for the step; the others still act
+        obs, *_ = env.step({"rl_0": np.zeros(1)})
+        assert sorted(obs) == ["rl_0", "rl_1"]
