@@ -24,6 +24,9 @@ BUILTIN = [
     "LaneChangeAccelEnv",
     "MergePOEnv",
     "TestEnv",
+    "TrafficLightGridBenchmarkEnv",
+    "TrafficLightGridEnv",
+    "TrafficLightGridPOEnv",
     "WaveAttenuationEnv",
     "WaveAttenuationPOEnv",
 ]

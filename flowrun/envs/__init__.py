@@ -7,6 +7,11 @@ from flowrun.envs.ring.accel import AccelEnv
 from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
 from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
 from flowrun.envs.test import TestEnv
+from flowrun.envs.traffic_light_grid import (
+    TrafficLightGridBenchmarkEnv,
+    TrafficLightGridEnv,
+    TrafficLightGridPOEnv,
+)
 
 register_envs()
 
@@ -16,6 +21,9 @@ __all__ = [
     "LaneChangeAccelEnv",
     "MergePOEnv",
     "TestEnv",
+    "TrafficLightGridBenchmarkEnv",
+    "TrafficLightGridEnv",
+    "TrafficLightGridPOEnv",
     "WaveAttenuationEnv",
     "WaveAttenuationPOEnv",
     "env_names",

@@ -22,6 +22,7 @@ from flowrun.config.params import (
     SumoParams,
     VehicleParams,
 )
+from flowrun.envs.grid_defaults import GRID_CONFIGS
 
 #: Flow's merge0: inflow on the highway (veh/h), share of AVs in it, inflow on the ramp (veh/h)
 MERGE_FLOW_RATE, MERGE_RL_PENETRATION, MERGE_RAMP_RATE = 2000, 0.1, 100
@@ -92,7 +93,10 @@ def merge0_config(
 
 
 #: Default experiment of each built-in env that has its own (others: the ring).
-DEFAULT_CONFIGS: dict[str, Callable[[], ExperimentConfig]] = {"MergePOEnv": merge0_config}
+DEFAULT_CONFIGS: dict[str, Callable[[], ExperimentConfig]] = {
+    "MergePOEnv": merge0_config,
+    **GRID_CONFIGS,
+}
 
 
 def make_with_default(

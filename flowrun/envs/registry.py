@@ -22,6 +22,11 @@ def _builtin() -> dict[str, type]:
     from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
     from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
     from flowrun.envs.test import TestEnv
+    from flowrun.envs.traffic_light_grid import (
+        TrafficLightGridBenchmarkEnv,
+        TrafficLightGridEnv,
+        TrafficLightGridPOEnv,
+    )
 
     return {
         c.__name__: c
@@ -32,6 +37,9 @@ def _builtin() -> dict[str, type]:
             LaneChangeAccelEnv,
             MergePOEnv,
             TestEnv,
+            TrafficLightGridEnv,
+            TrafficLightGridPOEnv,
+            TrafficLightGridBenchmarkEnv,
         )
     }
 

@@ -1,0 +1,11 @@
+"""Flow < 0.5 module path ``flow.envs.green_wave_env`` (flowrun's traffic-light grid envs)."""
+
+from flowrun.envs.traffic_light_grid import (
+    GreenWaveTestEnv,
+    PO_TrafficLightGridEnv,
+    TrafficLightGridEnv,
+    TrafficLightGridPOEnv,
+)
+
+__all__ = ["GreenWaveTestEnv", "PO_TrafficLightGridEnv", "TrafficLightGridEnv",
+           "TrafficLightGridPOEnv"]  # fmt: skip

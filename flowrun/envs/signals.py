@@ -1,0 +1,115 @@
+"""Pure pieces of the traffic-light envs: Flow's switch logic, signal states, edge numbers.
+
+No SUMO here: :class:`SwitchTimers` is Flow's per-light bookkeeping (``last_change``,
+``direction``, ``currently_yellow``) as arrays, testable with plain inputs.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+BoolArray = npt.NDArray[np.bool_]
+FloatArray = npt.NDArray[np.float64]
+
+_EDGE = re.compile(r"^(bot|top|left|right)(\d+)_(\d+)$")
+
+
+def phase_state(vertical: Sequence[bool], direction: int, yellow: bool) -> str:
+    """A light's state: green (or yellow) for one direction's links, red for the others.
+
+    Args:
+        vertical: per link (SUMO's link order), whether it comes from a vertical edge.
+        direction: 0 = vertical traffic has green (Flow's ``GrGr``), 1 = horizontal.
+        yellow: the green links show yellow instead (Flow's ``yryr`` / ``ryry``).
+    """
+    on = "y" if yellow else "G"
+    return "".join(on if bool(v) == (direction == 0) else "r" for v in vertical)
+
+
+@dataclass
+class SwitchTimers:
+    """Flow's switch logic of ``TrafficLightGridEnv`` for ``n`` lights.
+
+    A light asked to switch (and not yellow) shows yellow for its current green links,
+    restarts ``last_change`` and flips ``direction``; while yellow, ``last_change`` grows by
+    ``dt`` per step and requests are ignored; once it reaches ``switch_time`` the new
+    direction turns green. So every green -> red passes through ``switch_time`` s of yellow,
+    and two switches start at least ``switch_time + dt`` s apart.
+
+    Attributes:
+        last_change: seconds since the last switch began (counted while yellow), per light.
+        direction: 0 vertical green, 1 horizontal green, per light.
+        currently_yellow: 1 while yellow, per light.
+    """
+
+    n: int
+    switch_time: float
+    dt: float
+    last_change: FloatArray = field(init=False)
+    direction: FloatArray = field(init=False)
+    currently_yellow: FloatArray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
+        """All lights vertical green, not yellow."""
+        self.last_change = np.zeros(self.n)
+        self.direction = np.zeros(self.n)
+        self.currently_yellow = np.zeros(self.n)
+
+    def step(self, switch: BoolArray) -> list[tuple[int, int, bool]]:
+        """Advance one simulation step with the switch requests ``switch`` (per light).
+
+        Returns:
+            ``(light, direction, yellow)`` of each light whose state must change now.
+        """
+        changes = []
+        for i in range(self.n):
+            if self.currently_yellow[i] == 1:
+                self.last_change[i] += self.dt
+                if self.last_change[i] >= self.switch_time:
+                    self.currently_yellow[i] = 0
+                    changes.append((i, int(self.direction[i]), False))
+            elif switch[i]:
+                changes.append((i, int(self.direction[i]), True))  # yellow for the old green
+                self.last_change[i] = 0.0
+                self.direction[i] = 1 - self.direction[i]
+                self.currently_yellow[i] = 1
+        return changes
+
+    def features(self) -> FloatArray:
+        """``last_change``, ``direction`` and ``currently_yellow`` of all lights, concatenated."""
+        return np.concatenate([self.last_change, self.direction, self.currently_yellow])
+
+
+def discrete_mask(action: int, n: int) -> BoolArray:
+    """Flow's ``Discrete(2**n)`` action as per-light switch flags (light 0 = highest bit)."""
+    bits = [int(b) for b in format(int(action), "b")][-n:] if n else []
+    return np.array([0] * (n - len(bits)) + bits, dtype=bool)
+
+
+def edge_number(edge: str, rows: int, cols: int) -> int:
+    """Flow's number of a grid edge (``_convert_edge``): 0 for no edge; internal edges of
+    ``center{k}`` come after all the others."""
+    if not edge:
+        return 0
+    if edge.startswith(":"):
+        digits = re.match(r":center(\d+)", edge)
+        k = int(digits.group(1)) if digits else 0
+        return (cols + 1) * rows * 2 + (rows + 1) * cols * 2 + k + 1
+    m = _EDGE.match(edge)
+    if m is None:
+        return 0
+    kind, row, col = m.group(1), int(m.group(2)), int(m.group(3))
+    rows_below = 2 * (cols + 1) * row
+    if kind in ("bot", "top"):
+        num = rows_below + 2 * cols * (row + 1) + 2 * col + 1
+        return num if kind == "bot" else num + 1
+    num = rows_below + 2 * cols * row + 2 * col + 1
+    return num if kind == "left" else num + 1

@@ -1,0 +1,221 @@
+"""RL signal control on Flow's traffic-light grid (Flow's grid0/grid1 benchmarks).
+
+Flow's ``flow.envs.traffic_light_grid``: one agent switches every light of a
+``TrafficLightGridNetwork``. Each light has two greens (vertical: Flow's ``GrGr``,
+horizontal: ``rGrG``); an action asks some lights to switch, which happens through
+``switch_time`` seconds of yellow (:class:`~flowrun.envs.signals.SwitchTimers`).
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium.spaces import Box, Discrete, Tuple
+
+from flowrun.core import rewards
+from flowrun.envs.base import Env
+from flowrun.envs.signals import SwitchTimers, discrete_mask, edge_number, phase_state
+from flowrun.errors import ConfigError
+
+ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
+    # seconds of yellow of a switch (Flow's "minimum switch time")
+    "switch_time": 2.0,
+    # "controlled": lights start vertical green and only RL switches them; "actuated":
+    # they run the network's programs until the agent first switches them
+    "tl_type": "controlled",
+    # Discrete(2**n) actions instead of Box(n)
+    "discrete": False,
+}
+ADDITIONAL_PO_ENV_PARAMS: dict[str, Any] = {
+    # vehicles observed per incoming edge of each light
+    "num_observed": 2,
+    # desired speed of the benchmark's training reward, m/s
+    "target_velocity": 30,
+}
+_VERTICAL = ("left", "right")
+
+
+class TrafficLightGridEnv(Env):
+    """Flow's ``TrafficLightGridEnv``: all lights of the grid switched by one agent.
+
+    Observation: ``Tuple`` of four ``Box``es over the first ``N = initial vehicles`` cars
+    (kernel order, zero-padded): speed / max speed, distance to the junction ahead / the
+    longest edge length, Flow's edge number / (Flow's ``num_edges`` - 1); then the lights'
+    ``last_change`` (s), ``direction`` and ``currently_yellow`` (``3 * n_lights``).
+    Action: ``Box(-1, 1, (n_lights,))``, > 0 asks light ``center{i}`` to switch
+    (``Discrete(2**n)`` with ``discrete``). Reward: ``-delay - (number of actions >= 0.5)``
+    with Flow's ``min_delay_unscaled`` delay. Termination: collision; truncation: horizon.
+    Not done: Flow re-inserts cars that reach an exit edge at their entry (needs
+    ``k.vehicle.add``); here they leave and inflows bring new ones.
+    """
+
+    ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        spec = self.network.spec
+        self.light_ids = [n.id for n in spec.nodes if n.type == "traffic_light"]
+        if not self.light_ids:
+            raise ConfigError(
+                f"{type(self).__name__} switches traffic lights, but network "
+                f"'{self.network.network_type or type(self.network).__name__}' has none "
+                "(use network type traffic_light_grid with traffic_lights: true)",
+                path="network",
+            )
+        p = self.env_params.additional_params
+        grid = self.net_params.additional_params.get("grid_array") or getattr(
+            self.network, "grid_array", {}
+        )
+        self.rows = int(spec.extra.get("rows", grid.get("row_num", 1)))
+        self.cols = int(spec.extra.get("cols", grid.get("col_num", len(self.light_ids))))
+        self.num_traffic_lights = len(self.light_ids)
+        self.tl_type = str(p["tl_type"])
+        self.discrete = bool(p.get("discrete", False))
+        self.min_switch_time = float(p["switch_time"])
+        self.timers = SwitchTimers(self.num_traffic_lights, self.min_switch_time, self.sim_step)
+        self.max_dist = max(e.length for e in spec.edges)
+        self.num_edges = int(getattr(self.network, "num_edges", len(spec.edges)))
+        self._vertical: list[list[bool]] = []
+        self._acted = False
+
+    # Flow's attribute names
+    @property
+    def last_change(self) -> np.ndarray:
+        """Seconds since each light's last switch began (as Flow, a column vector)."""
+        return self.timers.last_change.reshape(-1, 1)
+
+    @property
+    def direction(self) -> np.ndarray:
+        """0 vertical green, 1 horizontal green, per light."""
+        return self.timers.direction.reshape(-1, 1)
+
+    @property
+    def currently_yellow(self) -> np.ndarray:
+        """1 while the light is yellow."""
+        return self.timers.currently_yellow.reshape(-1, 1)
+
+    @property
+    def action_space(self) -> Box | Discrete:  # type: ignore[override]
+        """One switch request per light."""
+        if self.discrete:
+            return Discrete(2**self.num_traffic_lights)
+        return Box(low=-1, high=1, shape=(self.num_traffic_lights,), dtype=np.float32)
+
+    @property
+    def observation_space(self) -> Tuple:  # type: ignore[override]
+        """Speeds, distances, edge numbers of ``N`` cars, and the lights' features."""
+        n = self.initial_vehicles.num_vehicles
+        high = max(1.0, self.min_switch_time + self.sim_step)
+        return Tuple((
+            Box(0.0, 1.0, (n,), np.float32),
+            Box(0.0, np.inf, (n,), np.float32),
+            Box(0.0, 1.0, (n,), np.float32),
+            Box(0.0, high, (3 * self.num_traffic_lights,), np.float32),
+        ))  # fmt: skip
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        """New episode: timers cleared; ``controlled`` lights start vertical green."""
+        self.timers.reset()
+        obs, info = super().reset(seed=seed, options=options)
+        tk = self.k.traffic_light
+        self._vertical = [
+            [lane.split("_")[0].rstrip("0123456789").startswith(_VERTICAL) for lane in
+             tk.get_controlled_lanes(t)] for t in self.light_ids
+        ]  # fmt: skip
+        if self.tl_type != "actuated":
+            for i, light in enumerate(self.light_ids):
+                tk.set_state(light, phase_state(self._vertical[i], 0, False))
+            obs = self._format_obs(self.get_state())
+        return obs, info
+
+    # ------------------------------------------------------------------ actions
+    def _switch_mask(self, rl_actions: Any) -> np.ndarray:
+        if self.discrete:
+            return discrete_mask(int(np.asarray(rl_actions).reshape(-1)[0]),
+                                 self.num_traffic_lights)  # fmt: skip
+        return np.asarray(rl_actions, dtype=np.float64).reshape(-1) > 0.0
+
+    def _apply_rl_actions(self, rl_actions: Any) -> None:
+        self._update_lights(self._switch_mask(rl_actions))
+
+    def _update_lights(self, switch: np.ndarray) -> None:
+        self._acted = True
+        tk = self.k.traffic_light
+        for i, direction, yellow in self.timers.step(switch):
+            tk.set_state(self.light_ids[i], phase_state(self._vertical[i], direction, yellow))
+
+    def additional_command(self) -> None:
+        """Yellow timers run on steps without an action too."""
+        if not self._acted:
+            self._update_lights(np.zeros(self.num_traffic_lights, dtype=bool))
+        self._acted = False
+
+    # ------------------------------------------------------------------ observations
+    def _car_columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Speed / max speed, distance to the junction / max_dist, edge number, per car."""
+        vk, net = self.k.vehicle, self.k.network
+        speeds = np.asarray(vk.speed, dtype=np.float64) / net.max_speed()
+        edges = list(vk.edges)
+        pos = np.asarray(vk.lane_pos, dtype=np.float64)
+        length = np.array([net.edge_length(e) if e and not e.startswith(":") else 0.0
+                           for e in edges])  # fmt: skip
+        dist = np.where(length > 0, length - pos, 0.0) / self.max_dist
+        nums = np.array([edge_number(e, self.rows, self.cols) for e in edges], dtype=np.float64)
+        return speeds, dist, nums / max(self.num_edges - 1, 1)
+
+    def get_state(self) -> Any:
+        """See the class docstring."""
+        n = self.initial_vehicles.num_vehicles
+        cols = self._car_columns()
+        parts = []
+        for col, high in zip(cols, (1.0, np.inf, 1.0), strict=True):
+            out = np.zeros(n, dtype=np.float32)
+            k = min(n, col.size)
+            out[:k] = np.clip(col[:k], 0.0, high)
+            parts.append(out)
+        space = self.observation_space.spaces[3]
+        assert isinstance(space, Box)
+        lights = np.clip(self.timers.features(), 0.0, space.high).astype(np.float32)
+        return (parts[0], parts[1], parts[2], lights)
+
+    def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
+        """``-delay - number of switch requests >= 0.5`` (Flow)."""
+        delay = rewards.min_delay_unscaled(self)
+        if rl_actions is None:
+            return -delay
+        mask = self._switch_mask(rl_actions) if self.discrete else \
+            np.asarray(rl_actions, dtype=np.float64).reshape(-1) >= 0.5  # fmt: skip
+        penalty = rewards.boolean_action_penalty(mask, gain=1.0)
+        self.reward_terms = {"delay": -delay, "switch_penalty": -penalty}
+        return -delay - penalty
+
+
+class TrafficLightGridTestEnv(TrafficLightGridEnv):
+    """Flow's test variant: actions do nothing, reward 0."""
+
+    __test__ = False
+
+    def _apply_rl_actions(self, rl_actions: Any) -> None:
+        """Nothing."""
+
+    def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
+        """0."""
+        return 0.0
+
+
+#: Flow's older names (``flow.envs.green_wave_env``).
+GreenWaveTestEnv = TrafficLightGridTestEnv
+
+# Flow's module holds the partially observed variants too.
+from flowrun.envs.traffic_light_grid_po import (  # noqa: E402
+    PO_TrafficLightGridEnv as PO_TrafficLightGridEnv,
+)
+from flowrun.envs.traffic_light_grid_po import (  # noqa: E402
+    TrafficLightGridBenchmarkEnv as TrafficLightGridBenchmarkEnv,
+)
+from flowrun.envs.traffic_light_grid_po import (  # noqa: E402
+    TrafficLightGridPOEnv as TrafficLightGridPOEnv,
+)

@@ -1,0 +1,143 @@
+"""Partially observed signal control (Flow's ``TrafficLightGridPOEnv`` and the grid benchmark).
+
+Importable as Flow's ``flow.envs.traffic_light_grid`` names from
+:mod:`flowrun.envs.traffic_light_grid`.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium.spaces import Box
+
+from flowrun.core import rewards
+from flowrun.envs.signals import edge_number
+from flowrun.envs.traffic_light_grid import (
+    ADDITIONAL_ENV_PARAMS,
+    ADDITIONAL_PO_ENV_PARAMS,
+    TrafficLightGridEnv,
+)
+from flowrun.errors import ConfigError
+
+#: Flow's vehicle length in the edge density, m.
+VEHICLE_LENGTH = 5.0
+#: Flow's upper bound of every observed value.
+OBS_HIGH = 3.0
+
+
+class TrafficLightGridPOEnv(TrafficLightGridEnv):
+    """Flow's ``TrafficLightGridPOEnv``: each light sees the cars nearest to it.
+
+    Observation (``Box(0, 3)``, Flow's order): for each light (Flow's ``node_mapping``
+    order) and each of its 4 incoming edges, the ``num_observed`` cars nearest the junction
+    (zero-padded): their speeds / max speed, then distances to the junction / the longest
+    edge, then Flow's edge numbers / (``num_edges`` - 1) — ``3 * 4 * num_observed * n``
+    values; then per edge of the network ``5 m * cars / length`` and mean speed / max speed
+    (``2 * edges``); then ``last_change``, ``direction``, ``currently_yellow``
+    (``3 * n``). grid0 (3x3): 339 values; grid1 (5x5): 915.
+    Reward: ``-delay - 0.2 * (cars standing still)``; ``-delay`` when ``evaluate``.
+    """
+
+    ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = {
+        **ADDITIONAL_ENV_PARAMS,
+        **ADDITIONAL_PO_ENV_PARAMS,
+    }
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        num = self.env_params.additional_params["num_observed"]
+        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+            raise ConfigError(
+                f"expected a whole number >= 1, got {num!r}",
+                path="env.additional_params.num_observed",
+            )
+        self.num_observed = int(num)
+        mapping = getattr(self.network, "node_mapping", None)
+        if mapping is None:
+            raise ConfigError(
+                f"{type(self).__name__} needs a grid network (its node_mapping of incoming "
+                "edges per light); use network type traffic_light_grid",
+                path="network",
+            )
+        self.node_mapping: list[tuple[str, list[str]]] = list(mapping)
+        self.edge_list = [e.id for e in self.network.spec.edges]
+        self.observed_ids: list[str] = []
+
+    @property
+    def observation_space(self) -> Box:  # type: ignore[override]
+        """See the class docstring."""
+        size = (3 * 4 * self.num_observed * self.num_traffic_lights + 2 * len(self.edge_list)
+                + 3 * self.num_traffic_lights)  # fmt: skip
+        return Box(low=0.0, high=OBS_HIGH, shape=(size,), dtype=np.float32)
+
+    def get_state(self) -> Any:
+        """See the class docstring."""
+        vk, net = self.k.vehicle, self.k.network
+        max_speed = net.max_speed()
+        ids = vk.get_ids()
+        speeds = np.asarray(vk.speed, dtype=np.float64)
+        pos = np.asarray(vk.lane_pos, dtype=np.float64)
+        by_edge: dict[str, list[int]] = defaultdict(list)
+        for row, edge in enumerate(vk.edges):
+            by_edge[edge].append(row)
+        no = self.num_observed
+        norm = max(self.num_edges - 1, 1)
+        obs_speed, obs_dist, obs_edge = [], [], []
+        observed: list[str] = []
+        for _, edges in self.node_mapping:
+            for edge in edges:
+                rows = sorted(by_edge.get(edge, []), key=lambda r: -pos[r])[:no]
+                length = net.edge_length(edge)
+                pad = [0.0] * (no - len(rows))
+                obs_speed += [speeds[r] / max_speed for r in rows] + pad
+                obs_dist += [(length - pos[r]) / self.max_dist for r in rows] + pad
+                num = edge_number(edge, self.rows, self.cols) / norm
+                obs_edge += [num] * len(rows) + pad
+                observed += [ids[r] for r in rows]
+        density, velocity = [], []
+        for edge in self.edge_list:
+            rows = by_edge.get(edge, [])
+            if rows:
+                density.append(VEHICLE_LENGTH * len(rows) / net.edge_length(edge))
+                velocity.append(float(np.mean(speeds[rows])) / max_speed)
+            else:
+                density.append(0.0)
+                velocity.append(0.0)
+        self.observed_ids = observed
+        obs = np.concatenate([obs_speed, obs_dist, obs_edge, density, velocity,
+                              self.timers.features()])  # fmt: skip
+        return np.clip(obs, 0.0, OBS_HIGH).astype(np.float32)
+
+    def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
+        """``-delay - 0.2 * standing cars`` (``-delay`` when evaluating)."""
+        delay = rewards.min_delay_unscaled(self)
+        if self.env_params.evaluate:
+            return -delay
+        standstill = rewards.penalize_standstill(self, gain=0.2)
+        self.reward_terms = {"delay": -delay, "standstill": standstill}
+        return -delay + standstill
+
+    def additional_command(self) -> None:
+        """Yellow timers, and Flow's marking of the observed cars."""
+        super().additional_command()
+        vk = self.k.vehicle
+        for veh_id in self.observed_ids:
+            if veh_id in vk.table:
+                vk.set_observed(veh_id)
+
+
+class TrafficLightGridBenchmarkEnv(TrafficLightGridPOEnv):
+    """Flow's grid0/grid1 env: trains on the desired-velocity reward towards
+    ``target_velocity`` (0 after a collision), evaluates on ``-delay``."""
+
+    def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
+        """Desired velocity (``-delay`` when evaluating)."""
+        if self.env_params.evaluate:
+            return -rewards.min_delay_unscaled(self)
+        return rewards.desired_velocity(self, fail=bool(kwargs.get("fail", False)))
+
+
+#: Flow's older name (``flow.envs.green_wave_env``).
+PO_TrafficLightGridEnv = TrafficLightGridPOEnv
