@@ -202,3 +202,28 @@ def test_rl_cannot_switch_faster_than_switch_time_and_green_to_red_passes_yellow
         assert switches > 50
     finally:
         env.close()
+
+
+@pytest.mark.sumo
+def test_po_edge_density_and_speed_equal_the_kernel_getters() -> None:
+    env = make_env(load_config(CONFIGS / "grid0.yaml"))
+    try:
+        env.reset(seed=0)
+        for _ in range(60):
+            obs, *_ = env.step(np.ones(9, dtype=np.float32))
+        assert isinstance(env, TrafficLightGridPOEnv)
+        vk, net = env.k.vehicle, env.k.network
+        n_edges = len(env.edge_list)
+        start = 3 * 4 * env.num_observed * env.num_traffic_lights
+        density, speed = obs[start : start + n_edges], obs[start + n_edges : start + 2 * n_edges]
+        seen = 0
+        for i, edge in enumerate(env.edge_list):
+            ids = vk.get_ids_by_edge(edge)
+            want = 5.0 * len(ids) / net.edge_length(edge)
+            assert density[i] == pytest.approx(want, rel=1e-6)
+            mean = float(np.mean(vk.get_speed(ids))) / net.max_speed() if ids else 0.0
+            assert speed[i] == pytest.approx(mean, rel=1e-5, abs=1e-7)
+            seen += len(ids)
+        assert seen > 20
+    finally:
+        env.close()

@@ -63,6 +63,10 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
             )
         self.node_mapping: list[tuple[str, list[str]]] = list(mapping)
         self.edge_list = [e.id for e in self.network.spec.edges]
+        self._edge_col = {e: i for i, e in enumerate(self.edge_list)}
+        self._edge_len = np.array([e.length for e in self.network.spec.edges])
+        norm = max(self.num_edges - 1, 1)
+        self._edge_num = {e: edge_number(e, self.rows, self.cols) / norm for e in self.edge_list}
         self.observed_ids: list[str] = []
 
     @property
@@ -83,7 +87,6 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         for row, edge in enumerate(vk.edges):
             by_edge[edge].append(row)
         no = self.num_observed
-        norm = max(self.num_edges - 1, 1)
         obs_speed, obs_dist, obs_edge = [], [], []
         observed: list[str] = []
         for _, edges in self.node_mapping:
@@ -93,18 +96,16 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
                 pad = [0.0] * (no - len(rows))
                 obs_speed += [speeds[r] / max_speed for r in rows] + pad
                 obs_dist += [(length - pos[r]) / self.max_dist for r in rows] + pad
-                num = edge_number(edge, self.rows, self.cols) / norm
+                num = self._edge_num[edge]
                 obs_edge += [num] * len(rows) + pad
                 observed += [ids[r] for r in rows]
-        density, velocity = [], []
-        for edge in self.edge_list:
-            rows = by_edge.get(edge, [])
-            if rows:
-                density.append(VEHICLE_LENGTH * len(rows) / net.edge_length(edge))
-                velocity.append(float(np.mean(speeds[rows])) / max_speed)
-            else:
-                density.append(0.0)
-                velocity.append(0.0)
+        col = np.fromiter((self._edge_col.get(e, -1) for e in vk.edges), np.int64, len(ids))
+        on = col >= 0  # cars on junction-internal edges count for no edge
+        n_edges = len(self.edge_list)
+        counts = np.bincount(col[on], minlength=n_edges).astype(np.float64)
+        sums = np.bincount(col[on], weights=speeds[on], minlength=n_edges)
+        density = VEHICLE_LENGTH * counts / self._edge_len
+        velocity = np.divide(sums, counts, out=np.zeros(n_edges), where=counts > 0) / max_speed
         self.observed_ids = observed
         obs = np.concatenate([obs_speed, obs_dist, obs_edge, density, velocity,
                               self.timers.features()])  # fmt: skip
