@@ -44,7 +44,8 @@ def test_controller_names_by_kind() -> None:
     assert {"RLController", "SimCarFollowingController"} <= set(accel)
     assert controller_names("routing") == ["ContinuousRouter", "GridRouter"]
     assert controller_names("lane_change") == ["SimLaneChangeController", "StaticLaneChanger"]
-    assert controller_names() == [*accel, "ContinuousRouter", "GridRouter", *controller_names("lane_change")]
+    routers = ["ContinuousRouter", "GridRouter"]
+    assert controller_names() == [*accel, *routers, *controller_names("lane_change")]
 
 
 def test_short_names_class_names_and_aliases_resolve_to_the_same_class() -> None:
