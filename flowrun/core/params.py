@@ -4,6 +4,7 @@ Re-exported from :mod:`flowrun.config.params`, where the YAML config is built fr
 classes.
 """
 
+from flowrun.config.modes import LANE_CHANGE_MODES, SPEED_MODES
 from flowrun.config.params import (
     EnvParams,
     InFlows,
@@ -16,10 +17,15 @@ from flowrun.config.params import (
     VehicleParams,
 )
 
+#: Flow's name of the lane-change mode table
+LC_MODES = LANE_CHANGE_MODES
+
 #: Flow >= 0.4 name of the simulator parameters (SUMO is the only simulator here).
 SimParams = SumoParams
 
 __all__ = [
+    "LC_MODES",
+    "SPEED_MODES",
     "EnvParams",
     "InFlows",
     "InitialConfig",

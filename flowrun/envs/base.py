@@ -24,6 +24,7 @@ import gymnasium
 import numpy as np
 
 from flowrun.config.params import EnvParams, SumoParams
+from flowrun.config.validate import check_params
 from flowrun.envs.frames import StepRecord, complete_frames, step_record
 from flowrun.envs.render import render_ring
 from flowrun.envs.vehicles import (
@@ -101,6 +102,10 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
                 f"render_mode {render_mode!r} is not supported; use None or 'rgb_array'"
             )
         check_additional_params(type(self), env_params)
+        # objects built (or changed) in Python get the YAML's checks where they are used
+        check_params(
+            env_params, sim_params, network.net_params, network.initial_config, network.vehicles
+        )
         self.env_params = env_params
         self.sim_params = sim_params
         self.network = network

@@ -70,6 +70,8 @@ def sumo_command(files: SumoFiles, params: SumoParams, gui: bool) -> list[str]:
         cmd += ["--additional-files", ",".join(str(f) for f in files.additional)]
     if not params.print_warnings:
         cmd += ["--no-warnings", "true"]
+    if getattr(params, "overtake_right", False):
+        cmd += ["--lanechange.overtake-right", "true"]
     if params.use_ballistic:
         cmd += ["--step-method.ballistic", "true"]
     if params.lateral_resolution is not None:
