@@ -94,3 +94,17 @@ def test_flows_older_module_paths_import_the_same_classes() -> None:
     assert (Figure8Scenario, HighwayScenario, MergeScenario) == (
         FigureEightNetwork, HighwayNetwork, MergeNetwork,
     )  # fmt: skip
+
+
+def test_tailway_on_the_ring_is_the_followers_headway() -> None:
+    env = make_env(load("sugiyama"))
+    try:
+        env.reset(seed=0)
+        for _ in range(30):
+            env.step(None)
+        vk = env.k.vehicle
+        for vid in vk.get_ids()[:5]:
+            follower = vk.get_follower(vid)
+            assert vk.get_tailway(vid) == pytest.approx(vk.get_headway(follower))
+    finally:
+        env.close()

@@ -211,6 +211,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             self.leader_speed = np.where(has_lead, speed[self.leader], speed)
             self.follower_speed = np.where(has_fol, speed[self.follower], speed)
             self.follower_headway = np.where(has_fol, self.headway[self.follower], np.inf)
+        if self.ring_path:
+            self.tailway = self.follower_headway
 
     @property
     def accel_real(self) -> np.ndarray:
