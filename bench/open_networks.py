@@ -1,6 +1,6 @@
 """Cost of a simulation step on open networks: SUMO alone (the floor) vs flowrun.
 
-Run: ``.venv/bin/python bench/open_networks.py`` (about 3 min). See ``bench/README.md``. Two
+Run: ``.venv/bin/python bench/open_networks.py`` (about 5 min). See ``bench/README.md``. Two
 cases, every mode timed in the same run, modes interleaved within each repetition:
 
 - **merge**: ``configs/merge.yaml`` (Flow's merge0: 2,000 veh/h on the highway of which 10 %
