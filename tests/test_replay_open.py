@@ -266,3 +266,15 @@ def test_the_merge_main_road_diagram_moves_forward_through_the_junction(
         assert np.all(np.diff(pos) >= -1e-9)
         crossed += bool(pos.min() < layout.offsets["left"] < layout.offsets["center"] < pos.max())
     assert crossed > 3
+
+
+def test_plot_stride_counts_the_cars_of_every_step(
+    toy: tuple[McapLog, dict[str, list[tuple[float, float]]]], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from flowrun.replay import plots
+
+    log, _ = toy
+    points = sum(len(f.ids) for f in log.frames())
+    first = len(next(log.frames()).ids)
+    monkeypatch.setattr(plots, "MAX_POINTS", 100)
+    assert plots.plot_stride(log) == math.ceil(points / 100) > math.ceil(300 * first / 100)

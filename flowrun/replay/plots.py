@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 
 from flowrun.errors import RecordingError
 from flowrun.recording import McapLog
+from flowrun.recording.writer import ROSTER_METADATA
 from flowrun.replay.analysis import SpeedSeries, TimeSpace, speed_series, time_space_points
 from flowrun.replay.route import RouteLayout
 from flowrun.replay.summary import run_label
@@ -40,9 +41,10 @@ def plot_stride(log: McapLog) -> int:
     frames = log.frame_count
     if not frames:
         return 1
-    # vehicles per frame is not in the index: the stats topic has it for every step (cars
-    # come and go on open networks); a log without stats: probe the first frame.
-    counts = [s.num_vehicles for s in log.stats()]
+    # vehicles per frame is not in the index. With one roster all frames have the first
+    # one's; where cars come and go (open networks) the stats topic has every step's count.
+    fixed = log.all_metadata.get(ROSTER_METADATA, {}).get("rosters") == "1"
+    counts = [] if fixed else [s.num_vehicles for s in log.stats()]
     if counts:
         total = sum(counts) * frames / len(counts)
     else:
