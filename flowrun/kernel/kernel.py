@@ -89,6 +89,7 @@ class Kernel:
         self.simulation.attach(api)
         self.traffic_light.attach(api)
         self.simulation.before_step = self.vehicle.send_commands
+        self.simulation.after_teleport = self.vehicle.resync
         self.vehicle.update(first=True)
 
     def _insert(self, api: Any, table: VehicleTable) -> None:

@@ -93,7 +93,7 @@ class Population:
 
     Attributes (compact, one entry per live vehicle, in entry order):
         ids, types, group, is_rl, commanded, continuous, lengths, min_gaps, max_speeds,
-        accels, decels, speed_modes, lane_change_modes.
+        accels, decels.
         version: incremented whenever vehicles enter or leave.
     """
 
@@ -131,7 +131,7 @@ class Population:
         """Vehicles that entered the network (appended in the given order)."""
         if not ids:
             return
-        new_slots = []
+        new_slots, new_ids = [], []
         for vid, g in zip(ids, groups, strict=True):
             if vid in self._slot_of:
                 continue
@@ -139,7 +139,8 @@ class Population:
             self._slot_of[vid] = slot
             self._slot_group[slot] = g
             new_slots.append(slot)
-            self.ids.append(vid)
+            new_ids.append(vid)
+        self.ids = self.ids + new_ids  # a new list: frames queued earlier keep theirs
         self.slots = np.concatenate((self.slots, np.array(new_slots, dtype=np.int64)))
         self._refresh()
 
@@ -169,8 +170,7 @@ class Population:
         self._row_of_slot[self.slots] = np.arange(self.slots.size)
         g = self._slot_group[self.slots]
         self.group = g
-        names = [c.name for c in self.classes]
-        self.types = [names[i] for i in g.tolist()]
+        self._types: tuple[int, list[str]] | None = None
         self.is_rl = self._c_rl[g]
         self.commanded = self._c_cmd[g]
         self.continuous = self._c_cont[g]
@@ -180,10 +180,16 @@ class Population:
         self.max_speeds = self._c_vmax[g]
         self.accels = self._c_acc[g]
         self.decels = self._c_dec[g]
-        self.speed_modes = [self.classes[i].speed_mode for i in g.tolist()]
-        self.lane_change_modes = [self.classes[i].lane_change_mode for i in g.tolist()]
 
     # ------------------------------------------------------------------ lookups
+    @property
+    def types(self) -> list[str]:
+        """Group (vType) name of every live vehicle; built when first asked after a change."""
+        if self._types is None or self._types[0] != self.version:
+            names = [c.name for c in self.classes]
+            self._types = (self.version, [names[i] for i in self.group.tolist()])
+        return self._types[1]
+
     @property
     def size(self) -> int:
         """Number of vehicles in the network."""

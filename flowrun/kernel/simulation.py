@@ -24,6 +24,9 @@ class SimulationKernel:
         #: called right before each step: the vehicle kernel's buffered commands go out, so
         #: Flow's ``apply_acceleration(...); simulation_step(); update(False)`` works as in Flow
         self.before_step: Callable[[], None] | None = None
+        #: called after a step in which SUMO teleported cars (the vehicle kernel re-checks
+        #: who is on the road: SUMO's departed/arrived lists do not report teleports)
+        self.after_teleport: Callable[[], None] | None = None
 
     def attach(self, api: Any) -> None:
         """Bind to a freshly started simulation and zero the counters."""
@@ -49,6 +52,8 @@ class SimulationKernel:
             self.colliding_ids = list(self.api.simulation.getCollidingVehiclesIDList())
         self.collisions += collisions
         self.teleports += teleports
+        if teleports and self.after_teleport is not None:
+            self.after_teleport()
 
     def check_collision(self) -> bool:
         """Whether SUMO reported a collision (or a teleport) in the last step."""

@@ -112,7 +112,6 @@ class FastCalls:
     get_lane_position: Callable[[str], float]
     departed_ids: Callable[[], Sequence[str]]
     arrived_ids: Callable[[], Sequence[str]]
-    id_count: Callable[[], int]
 
     @staticmethod
     def of(api: Any) -> FastCalls:
@@ -132,7 +131,6 @@ class FastCalls:
                 raw.vehicle_getLanePosition,
                 raw.simulation_getDepartedIDList,
                 raw.simulation_getArrivedIDList,
-                raw.vehicle_getIDCount,
             )
         v, sim = api.vehicle, api.simulation
         return FastCalls(
@@ -148,7 +146,6 @@ class FastCalls:
             v.getLanePosition,
             sim.getDepartedIDList,
             sim.getArrivedIDList,
-            v.getIDCount,
         )
 
 

@@ -84,7 +84,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self.headway = np.full(n, np.inf)
         self.leader = np.full(n, -1, dtype=np.int64)
         self.follower = np.full(n, -1, dtype=np.int64)
-        self.odometer = np.zeros(n)
+        self._odometer: np.ndarray | None = np.zeros(n)
         self.x = np.zeros(n)
         self.y = np.zeros(n)
         self.speed_limit = np.full(n, np.inf)
@@ -100,6 +100,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self._version = self.table.version
         self._route_end = np.full(n, -1, dtype=np.int64)
         self._pending_removal: list[str] = []
+        self._resync = False
         self._new_rows = _NO_ROWS
         self._observed: dict[str, None] = {}
         self.departed_ids: list[str] = []
@@ -177,8 +178,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
                 # flattened first: numpy would otherwise inspect every (x, y) tuple's shape
                 xy = np.array(list(_flatten(map(fast.get_position, ids))), dtype=np.float64)
                 self.x, self.y = xy[0::2], xy[1::2]
-            self.odometer = np.fromiter(map(fast.get_distance, ids), np.float64, n)
-            unwrapped = self._start_position + self.odometer
+            self._odometer = odometer = np.fromiter(map(fast.get_distance, ids), np.float64, n)
+            unwrapped = self._start_position + odometer
             self.position = np.mod(unwrapped, self.spec.length)
             self._stale_edges = True
             if not self._uniform_speed:
@@ -215,6 +216,15 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             self.tailway = self.follower_headway
 
     @property
+    def odometer(self) -> np.ndarray:
+        """Distance every car has driven since it entered, m (SUMO's ``getDistance``)."""
+        if self._odometer is None:
+            get = self._fast.get_distance
+            ids = self.table.ids
+            self._odometer = np.fromiter(map(get, ids), np.float64, len(ids))
+        return self._odometer
+
+    @property
     def accel_real(self) -> np.ndarray:
         """Acceleration realised over the last step, m/s^2 (computed when first asked)."""
         if self._accel_real is None:
@@ -236,7 +246,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             self._new_rows = _NO_ROWS
         keys = lanes.keys(list(map(fast.get_lane_id, ids)))
         lane_pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
-        self.odometer = np.fromiter(map(fast.get_distance, ids), np.float64, n)
+        self._odometer = None  # read when someone asks (recording, get_distance)
         if self.read_xy:
             xy = np.array(list(_flatten(map(fast.get_position, ids))), dtype=np.float64)
             self.x, self.y = xy[0::2], xy[1::2]
@@ -325,10 +335,12 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         arrived = [] if first else list(fast.arrived_ids())
         arrived += self._pending_removal
         self._pending_removal = []
-        if fast.id_count() != pop.size - len(arrived) + len(departed):  # resynchronise
-            now = set(self.api.vehicle.getIDList())
-            arrived = [v for v in pop.ids if v not in now]
-            departed = [v for v in self.api.vehicle.getIDList() if v not in pop]
+        if self._resync:  # teleports can take cars off the road: ask SUMO who is there
+            self._resync = False
+            now = self.api.vehicle.getIDList()
+            present = set(now)
+            arrived = [v for v in pop.ids if v not in present]
+            departed = [v for v in now if v not in pop]
         self.departed_ids, self.arrived_ids = departed, arrived
         self._flow_counts.append((len(departed), len(arrived)))
         if not departed and not arrived and self._version == pop.version:
@@ -396,6 +408,11 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
                 route = choices[int(self.rng.choice(len(choices), p=probs / probs.sum()))][0]
             self.api.vehicle.setRoute(self.table.ids[r], list(route))
             self._route_end[r] = self._lanes.edge_pos.get(route[-1], -1)
+
+    def resync(self) -> None:
+        """Check the population against SUMO's vehicle list at the next update (after a
+        teleport, which the departed/arrived lists do not report)."""
+        self._resync = True
 
     def remove(self, veh_id: str) -> None:
         """Take a vehicle out of the simulation (it leaves the arrays at the next step)."""

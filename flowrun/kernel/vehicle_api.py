@@ -38,7 +38,6 @@ class FlowVehicleGetters:
     follower: np.ndarray
     lanes: np.ndarray
     position: np.ndarray
-    odometer: np.ndarray
     speed_limit: np.ndarray
     x: np.ndarray
     y: np.ndarray
@@ -63,6 +62,10 @@ class FlowVehicleGetters:
 
     @property
     def accel_real(self) -> np.ndarray:  # implemented by the kernel
+        raise NotImplementedError
+
+    @property
+    def odometer(self) -> np.ndarray:  # implemented by the kernel
         raise NotImplementedError
 
     # ------------------------------------------------------------------ Flow's getters
