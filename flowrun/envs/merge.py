@@ -189,27 +189,24 @@ class MergePOEnv(Env):
         max_speed = self.k.network.max_speed()
         max_length = self.k.network.length()
         obs = np.zeros(OBS_PER_RL * self.num_rl)
-        self.leader, self.follower = [], []
-        for i, rl_id in enumerate(self.rl_veh):
-            speed = vk.get_speed(rl_id)
-            lead, follow = vk.get_leader(rl_id), vk.get_follower(rl_id)
-            if lead:
-                self.leader.append(lead)
-                lead_speed, headway = vk.get_speed(lead), vk.get_headway(rl_id)
-            else:
-                lead_speed, headway = max_speed, max_length
-            if follow:
-                self.follower.append(follow)
-                follow_speed, tailway = vk.get_speed(follow), vk.get_tailway(rl_id)
-            else:
-                follow_speed, tailway = 0.0, max_length
-            obs[OBS_PER_RL * i : OBS_PER_RL * (i + 1)] = (
+        rows = vk.table.rows(self.rl_veh)  # the controlled AVs' rows in the kernel's arrays
+        speed = vk.speed[rows]
+        lead, follow = vk.leader[rows], vk.follower[rows]
+        has_lead, has_follow = lead >= 0, follow >= 0
+        values = np.stack(
+            (
                 speed / max_speed,
-                (lead_speed - speed) / max_speed,
-                headway / max_length,
-                (speed - follow_speed) / max_speed,
-                tailway / max_length,
-            )
+                (np.where(has_lead, vk.speed[lead], max_speed) - speed) / max_speed,
+                np.where(has_lead, vk.headway[rows], max_length) / max_length,
+                (speed - np.where(has_follow, vk.speed[follow], 0.0)) / max_speed,
+                np.where(has_follow, vk.tailway[rows], max_length) / max_length,
+            ),
+            axis=1,
+        )
+        obs[: values.size] = values.reshape(-1)
+        ids = vk.table.ids
+        self.leader = [ids[k] for k in lead[has_lead].tolist()]
+        self.follower = [ids[k] for k in follow[has_follow].tolist()]
         return np.minimum(np.maximum(obs, self._obs_low), self._obs_high)
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
@@ -219,12 +216,13 @@ class MergePOEnv(Env):
         if self.env_params.evaluate:
             return float(np.mean(speeds)) if speeds.size else 0.0
         self.update_rl_queue()
-        led = [v for v in self.rl_veh if vk.get_leader(v)]
+        rows = vk.table.rows(self.rl_veh)
+        led = rows[vk.leader[rows] >= 0]  # controlled AVs with a leader
         terms = merge_reward(
             speeds,
             float(self.env_params.additional_params["target_velocity"]),
-            np.array(vk.get_headway(led), dtype=np.float64),
-            np.array(vk.get_speed(led), dtype=np.float64),
+            vk.headway[led],
+            speeds[led],
             fail=bool(kwargs.get("fail", False)),
         )
         self.reward_terms = terms
