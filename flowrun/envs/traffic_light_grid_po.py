@@ -6,7 +6,6 @@ Importable as Flow's ``flow.envs.traffic_light_grid`` names from
 
 from __future__ import annotations
 
-from collections import defaultdict
 from typing import Any, ClassVar
 
 import numpy as np
@@ -68,6 +67,15 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         norm = max(self.num_edges - 1, 1)
         self._edge_num = {e: edge_number(e, self.rows, self.cols) / norm for e in self.edge_list}
         self.observed_ids: list[str] = []
+        # the observed edges in observation order (light by light), and for each network edge
+        # its place in that order (-1: not observed)
+        observed_edges = [edge for _, edges in self.node_mapping for edge in edges]
+        self._slot_of_col = np.full(len(self.edge_list) + 1, -1, dtype=np.int64)
+        for slot, edge in enumerate(observed_edges):
+            self._slot_of_col[self._edge_col[edge]] = slot
+        by_id = {e.id: e for e in self.network.spec.edges}
+        self._slot_length = np.array([by_id[e].length for e in observed_edges])
+        self._slot_num = np.array([self._edge_num[e] for e in observed_edges])
 
     @property
     def observation_space(self) -> Box:  # type: ignore[override]
@@ -80,33 +88,32 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         """See the class docstring."""
         vk, net = self.k.vehicle, self.k.network
         max_speed = net.max_speed()
-        ids = vk.get_ids()
         speeds = np.asarray(vk.speed, dtype=np.float64)
         pos = np.asarray(vk.lane_pos, dtype=np.float64)
-        by_edge: dict[str, list[int]] = defaultdict(list)
-        for row, edge in enumerate(vk.edges):
-            by_edge[edge].append(row)
-        no = self.num_observed
-        obs_speed, obs_dist, obs_edge = [], [], []
-        observed: list[str] = []
-        for _, edges in self.node_mapping:
-            for edge in edges:
-                rows = sorted(by_edge.get(edge, []), key=lambda r: -pos[r])[:no]
-                length = net.edge_length(edge)
-                pad = [0.0] * (no - len(rows))
-                obs_speed += [speeds[r] / max_speed for r in rows] + pad
-                obs_dist += [(length - pos[r]) / self.max_dist for r in rows] + pad
-                num = self._edge_num[edge]
-                obs_edge += [num] * len(rows) + pad
-                observed += [ids[r] for r in rows]
-        col = np.fromiter((self._edge_col.get(e, -1) for e in vk.edges), np.int64, len(ids))
+        n = speeds.size
+        col = np.fromiter((self._edge_col.get(e, -1) for e in vk.edges), np.int64, n)
+        # the num_observed cars nearest the junction on each observed edge, edge by edge
+        slot = self._slot_of_col[col]  # col -1 (internal edge) maps to the last entry: -1
+        rows = np.flatnonzero(slot >= 0)
+        rows = rows[np.lexsort((-pos[rows], slot[rows]))]
+        s = slot[rows]
+        rank = np.arange(s.size) - np.searchsorted(s, s, side="left")
+        keep = rank < self.num_observed
+        rows, s = rows[keep], s[keep]
+        dest = s * self.num_observed + rank[keep]
+        size = self._slot_length.size * self.num_observed
+        obs_speed, obs_dist, obs_edge = np.zeros(size), np.zeros(size), np.zeros(size)
+        obs_speed[dest] = speeds[rows] / max_speed
+        obs_dist[dest] = (self._slot_length[s] - pos[rows]) / self.max_dist
+        obs_edge[dest] = self._slot_num[s]
+        ids = vk.table.ids
+        self.observed_ids = [ids[r] for r in rows.tolist()]
         on = col >= 0  # cars on junction-internal edges count for no edge
         n_edges = len(self.edge_list)
         counts = np.bincount(col[on], minlength=n_edges).astype(np.float64)
         sums = np.bincount(col[on], weights=speeds[on], minlength=n_edges)
         density = VEHICLE_LENGTH * counts / self._edge_len
         velocity = np.divide(sums, counts, out=np.zeros(n_edges), where=counts > 0) / max_speed
-        self.observed_ids = observed
         obs = np.concatenate([obs_speed, obs_dist, obs_edge, density, velocity,
                               self.timers.features()])  # fmt: skip
         return np.clip(obs, 0.0, OBS_HIGH).astype(np.float32)
