@@ -106,12 +106,16 @@ def on_network(name: str) -> Drive:
     """Flow's networks with human traffic: inflows on the open ones, 14 cars on the eight."""
     vehicles = VehicleParams()
     router = ControllerSpec("ContinuousRouter") if name == "figure_eight" else None
+    # at the grid's lights SUMO drives (IDM does not see red lights), as in Flow's grid
+    driver = "SimCarFollowingController" if name == "traffic_light_grid" else "IDM"
     vehicles.add(
         "human",
-        acceleration_controller=ControllerSpec("IDM", {"noise": 0.2}),
+        acceleration_controller=ControllerSpec(driver, {"noise": 0.2} if driver == "IDM" else {}),
         routing_controller=router,
         num_vehicles=14 if name == "figure_eight" else 0,
-        car_following_params=SumoCarFollowingParams(speed_mode="obey_safe_speed"),
+        car_following_params=SumoCarFollowingParams(
+            speed_mode="all_checks" if name == "traffic_light_grid" else "obey_safe_speed"
+        ),
         lane_change_params=SumoLaneChangeParams(lane_change_mode="sumo_default"),
     )
     inflows = InFlows()
@@ -123,12 +127,19 @@ def on_network(name: str) -> Drive:
         inflows.add("highway_0", "human", vehs_per_hour=4000, depart_speed=20,
                     depart_lane="free")  # fmt: skip
         params = {"length": 600, "lanes": 3, "num_edges": 2, "use_ghost_edge": True}
+    elif name == "traffic_light_grid":
+        params = {"grid_array": {"row_num": 2, "col_num": 2, "inner_length": 150,
+                                 "short_length": 150, "long_length": 150, "cars_top": 0,
+                                 "cars_bot": 0, "cars_left": 0, "cars_right": 0}}  # fmt: skip
+        for edge in ("bot0_0", "bot1_0", "right0_0", "right1_0", "top0_2", "top1_2",
+                     "left2_0", "left2_1"):  # fmt: skip
+            inflows.add(edge, "human", vehs_per_hour=500, depart_speed=10)
     cls = network_class(name)
     net = cls(name, vehicles, NetParams(additional_params=params, inflows=inflows or None))
     return Drive(EnvParams(horizon=10**9), SumoParams(sim_step=0.2, seed=3), net)
 
 
-NETWORKS = ["toy_merge", "merge", "figure_eight", "highway"]
+NETWORKS = ["toy_merge", "merge", "figure_eight", "highway", "traffic_light_grid"]
 
 
 def make_on(name: str) -> Drive:

@@ -1,28 +1,35 @@
-"""Leaders and followers on any network: numpy within lanes, SUMO beyond a lane's ends.
+"""Leaders and followers on any network: numpy within lanes, the lane graph or SUMO beyond.
 
 Within a lane, cars are sorted by lane position (:func:`leaders_by_lane`). Only the frontmost
 car of each occupied lane needs a look past the lane's end, along its route and through
-junction-internal lanes; SUMO's ``getLeader`` gives exactly that (gap minus the ego's
-``minGap``, which is added back). Likewise the rearmost car of each lane asks SUMO's
-``getFollower`` (gap minus the *follower's* ``minGap``). So SUMO is asked twice per occupied
-lane, not per car.
+junction-internal lanes, and only the rearmost car a look back. Where the road is
+unambiguous (one successor, nothing merging or crossing, the route going there, the next
+car within the look-ahead), the :class:`~flowrun.kernel.lane_graph.LaneGraph` answers with
+the rearmost car of the next occupied lane; elsewhere SUMO's ``getLeader`` (gap minus the
+ego's ``minGap``, added back) and ``getFollower`` (gap minus the *follower's* ``minGap``)
+do. Both give the same cars and gaps (``tests/test_open_kernel.py`` compares every car with
+SUMO on every network).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
+from flowrun.kernel.lane_graph import LaneGraph
 from flowrun.kernel.population import FloatArray, IntArray, Population
 from flowrun.kernel.snapshot import leaders_by_lane
 
 #: How far past the end (or before the start) of its lane a car looks for a leader
 #: (follower), m. Beyond it IDM's interaction term is below (32 / 500)^2 = 0.4 %.
 LOOKAHEAD = 500.0
+#: At most this many lanes are walked through before SUMO is asked.
+MAX_HOPS = 4
 
 Neighbour = Callable[[str, float], Any]
+Found = tuple[int, float] | None  # (row, gap) or no neighbour
 
 
 class Following:
@@ -34,36 +41,158 @@ class Following:
         tailway: gap from the follower's front bumper to this car's rear bumper, m.
     """
 
-    def __init__(self, get_leader: Neighbour, get_follower: Neighbour) -> None:
+    def __init__(
+        self,
+        get_leader: Neighbour,
+        get_follower: Neighbour,
+        graph: LaneGraph | None = None,
+        edge_pos: Mapping[str, int] | None = None,
+    ) -> None:
         self._get_leader = get_leader
         self._get_follower = get_follower
+        self.graph = graph
+        self._edge_pos = edge_pos or {}
 
     @classmethod
-    def of(cls, api: Any) -> Following:
+    def of(cls, api: Any, graph: LaneGraph | None = None,
+           edge_pos: Mapping[str, int] | None = None) -> Following:  # fmt: skip
         """Bound to ``libsumo``'s compiled calls (or ``traci``'s)."""
         raw = getattr(api, "_libsumo", None)
         if raw is not None and hasattr(raw, "vehicle_getLeader"):
-            return cls(raw.vehicle_getLeader, raw.vehicle_getFollower)
-        return cls(api.vehicle.getLeader, api.vehicle.getFollower)
+            return cls(raw.vehicle_getLeader, raw.vehicle_getFollower, graph, edge_pos)
+        return cls(api.vehicle.getLeader, api.vehicle.getFollower, graph, edge_pos)
 
     def compute(
-        self, pop: Population, lane_key: IntArray, lane_pos: FloatArray
+        self,
+        pop: Population,
+        lane_key: IntArray,
+        lane_pos: FloatArray,
+        routes: Mapping[str, tuple[str, ...]] | None = None,
     ) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
-        """Leader, follower, headway and tailway of every live car."""
+        """Leader, follower, headway and tailway of every live car.
+
+        Args:
+            pop: the cars in the network.
+            lane_key: each car's lane (:class:`~flowrun.kernel.lanes.LaneTable` key).
+            lane_pos: each car's front-bumper position on its lane, m.
+            routes: each car's route by id (lets the lane graph answer; SUMO otherwise).
+        """
         lengths, min_gaps, ids = pop.lengths, pop.min_gaps, pop.ids
         leader, follower, headway, fronts, rears = leaders_by_lane(lane_key, lane_pos, lengths)
         has_follower = follower >= 0
         tailway = np.where(has_follower, headway[np.where(has_follower, follower, 0)], np.inf)
+        graph = self.graph if routes is not None else None
+        walk = None
+        if graph is not None and fronts.size:
+            rear_of = np.full(graph.succ.size, -1, dtype=np.int64)
+            rear_of[lane_key[rears]] = rears
+            front_of = np.full(graph.succ.size, -1, dtype=np.int64)
+            front_of[lane_key[fronts]] = fronts
+            walk = _Walk(graph, lane_key, lane_pos, lengths, rear_of, front_of)
         get_leader, get_follower = self._get_leader, self._get_follower
         for r in fronts.tolist():
+            if walk is not None and routes is not None:
+                answer = walk.ahead(r, self._route_next(ids[r], int(lane_key[r]), routes))
+                if answer is not _ASK:
+                    if answer is not None:
+                        leader[r], headway[r] = answer
+                    continue
             found = get_leader(ids[r], LOOKAHEAD)
             if found and found[0] and found[0] in pop:
                 leader[r] = pop.row(found[0])
                 headway[r] = float(found[1]) + float(min_gaps[r])
         for r in rears.tolist():
+            if walk is not None:
+                answer = walk.behind(r)
+                if answer is not _ASK:
+                    if answer is not None:
+                        follower[r], tailway[r] = answer
+                    continue
             found = get_follower(ids[r], LOOKAHEAD)
             if found and found[0] and found[0] in pop:
                 j = pop.row(found[0])
                 follower[r] = j
                 tailway[r] = float(found[1]) + float(min_gaps[j])
         return leader, follower, headway, tailway
+
+    def _route_next(self, veh_id: str, key: int, routes: Mapping[str, tuple[str, ...]]) -> int:
+        """Edge index of the car's next route edge; -1 on an internal lane (any), -2 at the
+        route's end (no leader beyond, as SUMO), -3 unknown (ask SUMO)."""
+        graph = self.graph
+        assert graph is not None
+        if graph.internal[key]:
+            return -1
+        route = routes.get(veh_id)
+        edge = graph.edge_names[int(graph.edge_index[key])]
+        if not route or edge not in route:
+            return -3
+        i = route.index(edge)
+        if i == len(route) - 1:
+            return -2
+        return self._edge_pos.get(route[i + 1], -3)
+
+
+class _Ask:
+    """Marker: the lane graph cannot answer; ask SUMO."""
+
+
+_ASK: Any = _Ask()
+
+
+class _Walk:
+    """Walks the lane graph from a lane's front (rear) car to the next car ahead (behind)."""
+
+    def __init__(self, graph: LaneGraph, lane_key: IntArray, lane_pos: FloatArray,
+                 lengths: FloatArray, rear_of: IntArray, front_of: IntArray) -> None:  # fmt: skip
+        self.g = graph
+        self.key = lane_key
+        self.pos = lane_pos
+        self.lengths = lengths
+        self.rear_of = rear_of
+        self.front_of = front_of
+
+    def ahead(self, r: int, want: int) -> Found:
+        """The leader of front car ``r`` and the gap, ``None``, or :data:`_ASK`."""
+        if want == -2:
+            return None  # on its route's last edge: SUMO sees no leader beyond
+        if want == -3:
+            return _ASK
+        g, pos = self.g, self.pos
+        cur = int(self.key[r])
+        dist = float(g.length[cur]) - float(pos[r])
+        for _ in range(MAX_HOPS):
+            nxt = int(g.succ[cur])
+            # a crossing does not matter ahead (SUMO's leader is on the car's own path), a
+            # merge does (a car from the other branch may be the leader)
+            if nxt < 0 or int(g.pred[nxt]) != cur:
+                return _ASK
+            if not g.internal[nxt] and want >= 0 and int(g.edge_index[nxt]) != want:
+                return _ASK
+            j = int(self.rear_of[nxt])
+            if j >= 0:
+                gap = dist + float(pos[j]) - float(self.lengths[j])
+                return (j, gap) if gap <= LOOKAHEAD else _ASK
+            if not g.internal[nxt]:
+                return _ASK  # the next edge's lane is empty: SUMO looks further
+            dist += float(g.length[nxt])
+            cur = nxt
+        return _ASK
+
+    def behind(self, r: int) -> Found:
+        """The follower of rear car ``r`` and the gap, ``None``, or :data:`_ASK`."""
+        g, pos = self.g, self.pos
+        cur = int(self.key[r])
+        dist = float(pos[r]) - float(self.lengths[r])  # from this car's rear to the lane start
+        for _ in range(MAX_HOPS):
+            prev = int(g.pred[cur])
+            if prev < 0 or not g.clear[prev] or int(g.succ[prev]) != cur:
+                return _ASK
+            j = int(self.front_of[prev])
+            if j >= 0:
+                gap = dist + float(g.length[prev]) - float(pos[j])
+                return (j, gap) if gap <= LOOKAHEAD else _ASK
+            if not g.internal[prev]:
+                return _ASK  # the previous edge's lane is empty: SUMO looks further back
+            dist += float(g.length[prev])
+            cur = prev
+        return _ASK

@@ -15,6 +15,7 @@ import numpy as np
 
 from flowrun.controllers.base import CarFollowingInputs
 from flowrun.kernel.geometry import LaneGeometry, RingEdges, RingPlacement
+from flowrun.kernel.lane_graph import LaneGraph
 from flowrun.kernel.lanes import LaneTable
 from flowrun.kernel.open_road import Following
 from flowrun.kernel.population import Population, VehicleTable
@@ -97,6 +98,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self._lane_key = np.zeros(n, dtype=np.int64)
         self._lanes: LaneTable | None = None
         self._following_open: Following | None = None
+        #: every car's route by id (from SUMO when it enters, kept when flowrun reroutes it)
+        self._route_of: dict[str, tuple[str, ...]] = {}
         self._version = self.table.version
         self._route_end = np.full(n, -1, dtype=np.int64)
         self._pending_removal: list[str] = []
@@ -260,7 +263,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         if pop.continuous.any():  # before the look-ahead, which follows the new route
             self._route_continuously(lanes.edge_index[keys])
         self.leader, self.follower, self.headway, self.tailway = self._following_open.compute(
-            pop, keys, lane_pos
+            pop, keys, lane_pos, self._route_of
         )
         return speed
 
@@ -322,7 +325,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
     # ------------------------------------------------------------------ open networks
     def _attach_open(self, api: Any, lanes: LaneTable) -> None:
         self._lanes = lanes
-        self._following_open = Following.of(api)
+        self._following_open = Following.of(api, LaneGraph(lanes), lanes.edge_pos)
+        self._route_of = {}
         self._route_end = np.full(self.table.size, -1, dtype=np.int64)
         self._pending_removal = []
         self._flow_counts.clear()
@@ -351,6 +355,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         old_route_end = self._route_end
         old_prev = self.speed
         pop.remove(arrived)
+        for vid in arrived:
+            self._route_of.pop(vid, None)
         v = self.api.vehicle
         groups = [pop.class_index(v.getTypeID(vid)) for vid in departed]
         pop.add(departed, groups)
@@ -384,7 +390,9 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         rows = np.flatnonzero(~kept | (self._route_end < 0))
         get_route = self.api.vehicle.getRoute
         for r in rows.tolist():
-            route = get_route(pop.ids[r])
+            vid = pop.ids[r]
+            route = tuple(get_route(vid))
+            self._route_of[vid] = route
             self._route_end[r] = lanes.edge_pos.get(route[-1], -1) if route else -1
 
     def _route_continuously(self, edge_index: np.ndarray) -> None:
@@ -407,6 +415,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
                 probs = np.array([p for _, p in choices], dtype=np.float64)
                 route = choices[int(self.rng.choice(len(choices), p=probs / probs.sum()))][0]
             self.api.vehicle.setRoute(self.table.ids[r], list(route))
+            self._route_of[self.table.ids[r]] = tuple(route)
             self._route_end[r] = self._lanes.edge_pos.get(route[-1], -1)
 
     def resync(self) -> None:

@@ -47,6 +47,7 @@ class VehicleCommands:
     _routes: dict[int, list[str]]
     _next_reroute: np.ndarray
     _route_end: np.ndarray
+    _route_of: dict[str, tuple[str, ...]]
     _lanes: LaneTable | None
     _edge_by_id: dict[str, Edge]
 
@@ -119,6 +120,7 @@ class VehicleCommands:
                 self._next_reroute[i] = np.inf  # a user-chosen route is not looped
             elif route and self._lanes is not None:
                 self._route_end[i] = self._lanes.edge_pos.get(route[-1], -1)
+                self._route_of[ids[i]] = tuple(route)
         self.last_cmd = cmd
         self.accel_cmd = self._no_cmd.copy()
         self._lane_change = {}

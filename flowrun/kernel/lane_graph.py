@@ -1,0 +1,50 @@
+"""Which lane follows which: the unique successor / predecessor of every lane, as arrays.
+
+Leaders past a lane's end can be found without asking SUMO where the road is unambiguous:
+the lane has one successor (a junction-internal lane, then the next edge's lane), nothing
+merges into or crosses that path, and the car's route goes there. :class:`LaneGraph` holds
+those facts per lane key (see :class:`~flowrun.kernel.lanes.LaneTable`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flowrun.kernel.lanes import IntArray, LaneTable
+
+
+class LaneGraph:
+    """Unique successor and predecessor of every lane (-1 where there are none or several).
+
+    A normal lane's successor is the junction-internal lane of its only link (or the next
+    lane, without internal links); an internal lane's is the lane its link leads to.
+
+    Attributes:
+        succ, pred: per lane key, the unique successor / predecessor key or -1.
+        clear: per lane key, the lane neither merges nor crosses (an internal lane without
+            internal foes; every normal lane). Looking back, SUMO's follower search stops at
+            such lanes; looking ahead only merges matter (``pred`` not unique).
+        next_edge: per lane key, the edge index of the first normal lane reached through
+            the successors (-1 if ambiguous).
+    """
+
+    def __init__(self, lanes: LaneTable) -> None:
+        n = len(lanes.key)
+        succs: list[list[int]] = [[] for _ in range(n)]
+        preds: list[list[int]] = [[] for _ in range(n)]
+        for lane, links in lanes.links.items():
+            a = lanes.key[lane]
+            for link in links:
+                target = link[4] or link[0]
+                b = lanes.key.get(target)
+                if b is None:
+                    continue
+                succs[a].append(b)
+                preds[b].append(a)
+        self.succ: IntArray = np.array([s[0] if len(s) == 1 else -1 for s in succs], np.int64)
+        self.pred: IntArray = np.array([p[0] if len(p) == 1 else -1 for p in preds], np.int64)
+        self.clear = ~lanes.with_foes
+        self.internal = lanes.internal
+        self.length = lanes.length
+        self.edge_index = lanes.edge_index
+        self.edge_names = lanes.edge_names
