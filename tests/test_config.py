@@ -102,7 +102,7 @@ def test_field_names_are_accepted_where_yaml_keys_differ(tmp_path: Path) -> None
     assert cfg.sim.sim_step == 0.2
     assert cfg.env.env_class == "my_envs:MyEnv"
     assert cfg.vehicles.groups[0].num_vehicles == 2
-    assert cfg.vehicles.groups[0].car_following_params.speed_mode == 31  # stored as SUMO's int, as Flow
+    assert cfg.vehicles.groups[0].car_following_params.speed_mode == 31
 
 
 def test_bare_controller_name_and_inf_and_int_for_float(tmp_path: Path) -> None:

@@ -301,7 +301,7 @@ def test_collision_terminates_and_horizon_truncates():
 def test_default_speed_mode_keeps_a_reckless_av_from_crashing():
     env = make("WaveAttenuationPOEnv", horizon=300, overrides=["env.additional_params.max_accel=3"])
     try:
-        assert env.network.vehicles.get_type("rl").car_following_params.speed_mode == 25  # right_of_way
+        assert env.network.vehicles.get_type("rl").car_following_params.speed_mode == 25
         env.reset(seed=0)
         steps, _, terminated, truncated, info = run_until_done(env, 3.0, 300)
         assert truncated and not terminated and steps == 300
