@@ -33,9 +33,6 @@ def convert_text(config: Path) -> str:
         )
     flow = load_flow_module(config)
     header = f"# converted by flowrun convert from {config.name}\n"
-    tls = flow.traffic_lights
-    if tls is not None and tls.get_properties():
-        header += "# note: flow_params['tls'] (traffic lights) has no YAML form yet: left out\n"
     return header + dump_config(flow.config)
 
 

@@ -26,6 +26,8 @@ from flowrun.config.params import (
     VehicleParams,
     VehicleType,
 )
+from flowrun.config.signal_control import TrafficLightsConfig
+from flowrun.config.tls_yaml import parse_traffic_lights
 from flowrun.config.yamlio import KeyPath, Locations
 from flowrun.errors import ConfigError
 from flowrun.suggest import did_you_mean
@@ -111,6 +113,7 @@ class Converter:
             VehicleParams: self.vehicles,
             InFlows: self.inflows,
             NetworkConfig: self.network,
+            TrafficLightsConfig: self.traffic_lights,
         }
         if tp in special:
             return special[tp](data, path)
@@ -261,6 +264,10 @@ class Converter:
             osm_path=self.value(hints["osm_path"], data.get("osm_path"), (*path, "osm_path")),
         )
         return NetworkConfig(type=kind, net_params=net)
+
+    def traffic_lights(self, data: Any, path: KeyPath) -> TrafficLightsConfig:
+        """``traffic_lights:`` -> :class:`TrafficLightsConfig` (see ``config/tls_yaml.py``)."""
+        return parse_traffic_lights(self.loc, data, path)
 
     def _union(self, tp: Any, data: Any, path: KeyPath) -> Any:
         args = get_args(tp)

@@ -21,6 +21,8 @@ from flowrun.config.params import (
     SumoLaneChangeParams,
     VehicleParams,
 )
+from flowrun.config.signal_control import TrafficLightsConfig
+from flowrun.config.tls_yaml import traffic_lights_data
 from flowrun.config.yamlio import dump_yaml
 
 # Mode fields are stored as SUMO's ints; the YAML says the name where the int has one.
@@ -33,11 +35,14 @@ _MODE_NAMES = {
 def config_to_dict(cfg: ExperimentConfig) -> dict[str, Any]:
     """The config as plain data in the YAML layout (``config_from_dict`` inverts it).
 
-    ``train`` is left out when it is ``None`` (a config without training).
+    ``train`` is left out when it is ``None`` (a config without training), ``traffic_lights``
+    when nothing is declared (the network's own programs).
     """
     out = _section(cfg)
     if out.get("train") is None:
         out.pop("train", None)
+    if cfg.traffic_lights.is_default:
+        out.pop("traffic_lights", None)
     return out
 
 
@@ -71,6 +76,8 @@ def _plain(value: Any) -> Any:
         return [_section(flow) for flow in value.get()]
     if isinstance(value, NetworkConfig):
         return _network(value)
+    if isinstance(value, TrafficLightsConfig):
+        return traffic_lights_data(value)
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return _section(value)
     if isinstance(value, dict | list | tuple):

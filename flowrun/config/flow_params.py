@@ -31,6 +31,7 @@ from flowrun.config.params import (
     TrafficLightParams,
     VehicleParams,
 )
+from flowrun.config.signal_control import TrafficLightsConfig
 from flowrun.errors import ConfigError
 from flowrun.suggest import did_you_mean
 
@@ -57,7 +58,7 @@ class FlowExperiment:
         env_class: the environment class object when ``env_name`` was a class (else ``None``:
             the name in ``config.env.env_class`` is resolved when the env is made).
         network_class: the network class object when ``network`` was a class.
-        traffic_lights: ``tls`` (not part of the YAML model yet).
+        traffic_lights: ``tls`` (also ``config.traffic_lights.programs``).
         simulator: ``simulator`` as given (SUMO in any case).
     """
 
@@ -177,6 +178,7 @@ def from_flow_params(params: Mapping[str, Any], source: str | None = None) -> Fl
     env_name, env_cls = _env_name(params["env_name"], where)
     net_type, net_cls = _network_type(params["network"], where)
     env: EnvParams = _section(params, "env", where)
+    tls: TrafficLightParams = _section(params, "tls", where)
     cfg = ExperimentConfig(
         name=tag,
         sim=_section(params, "sim", where),
@@ -184,6 +186,7 @@ def from_flow_params(params: Mapping[str, Any], source: str | None = None) -> Fl
         network=NetworkConfig(net_type, _section(params, "net", where)),
         vehicles=_section(params, "veh", where),
         initial=_section(params, "initial", where),
+        traffic_lights=TrafficLightsConfig(tls),
     )
     # Through the YAML layout and the loader: one model, one set of checks.
     checked = config_from_dict(config_to_dict(cfg), source=where)
@@ -191,7 +194,7 @@ def from_flow_params(params: Mapping[str, Any], source: str | None = None) -> Fl
         config=dataclasses.replace(checked, source=source),
         env_class=env_cls,
         network_class=net_cls,
-        traffic_lights=_section(params, "tls", where),
+        traffic_lights=checked.traffic_lights.programs,
         simulator=str(simulator),
     )
 

@@ -31,7 +31,7 @@ _CONTROLLER_FIELDS = {
     "lane_change_controller": "lane_change",
     "routing_controller": "routing",
 }
-_SECTIONS = "name, sim, env, network, vehicles, initial, train"
+_SECTIONS = "name, sim, env, network, vehicles, initial, traffic_lights, train"
 
 
 def load_config(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> ExperimentConfig:
@@ -96,8 +96,11 @@ def _build(data: dict[str, Any], loc: Locations) -> ExperimentConfig:
     _check_group_ids(cfg, data, loc)
     _check_controllers(cfg, data, loc)
     _check_network(cfg, loc)
-    edges = _network_edges(cfg, loc)
+    network = _build_network(cfg, loc)
+    edges = None if network is None else [edge.id for edge in network.spec.edges]
     _check_inflows(cfg, edges, loc)
+    if network is not None:
+        _check_traffic_lights(cfg, network, loc)
     return cfg
 
 
@@ -211,8 +214,8 @@ def _check_inflows(cfg: ExperimentConfig, edges: list[str] | None, loc: Location
             )
 
 
-def _network_edges(cfg: ExperimentConfig, loc: Locations) -> list[str] | None:
-    """Build the config's network (its road, not SUMO's files) and return its edge ids.
+def _build_network(cfg: ExperimentConfig, loc: Locations) -> Any:
+    """Build the config's network (its road, not SUMO's files).
 
     ``None`` while ``flowrun.networks`` is not importable. A network that cannot be built (a
     missing template file, a route over unconnected edges, ...) is reported at its key.
@@ -228,7 +231,38 @@ def _network_edges(cfg: ExperimentConfig, loc: Locations) -> list[str] | None:
         raise loc.error(message, ("network", *_sub_path(err.path))) from None
     except FlowrunError as err:  # e.g. netconvert refusing an OpenStreetMap file
         raise loc.error(str(err), ("network",)) from None
-    return [edge.id for edge in network.spec.edges]
+    return network
+
+
+def _check_traffic_lights(cfg: ExperimentConfig, network: Any, loc: Locations) -> None:
+    """Declared programs against the junctions netconvert builds (one character per link);
+    a controller on a network with lights."""
+    tls = cfg.traffic_lights
+    at: KeyPath = ("traffic_lights",)
+    no_lights = not any(n.type == "traffic_light" for n in network.spec.nodes)
+    if tls.controller is not None and network.spec.net_file is None and no_lights:
+        raise loc.error(
+            f"controller {tls.controller} switches traffic lights, but the "
+            f"{cfg.network.type} network has none (a node needs type 'traffic_light')",
+            (*at, "controller"),
+        )
+    params = tls.programs
+    check = _optional("flowrun.networks.tls", "check_programs")
+    if check is None or not (params.get_properties() or params.baseline):
+        return
+    try:
+        check(network, params)
+    except ConfigError as err:
+        declared = list(params.get_properties())
+        node = next((n for n in declared if err.path.startswith(f"traffic_lights.{n}")), None)
+        if node is None:  # the actuated default of ``baseline: true``
+            raise loc.error(f"baseline program: {err.message}", (*at, "baseline")) from None
+        from flowrun.config.tls_yaml import light_subpath
+
+        sub = light_subpath(err.path, node)
+        raise loc.error(err.message, (*at, "lights", declared.index(node), *sub)) from None
+    except FlowrunError as err:
+        raise loc.error(str(err), ("network",)) from None
 
 
 def _check_network(cfg: ExperimentConfig, loc: Locations) -> None:

@@ -12,6 +12,7 @@ from flowrun.config.params import (
     SumoParams,
     VehicleParams,
 )
+from flowrun.config.signal_control import TrafficLightsConfig
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,7 @@ class ExperimentConfig:
         network: network type and parameters.
         vehicles: vehicle groups.
         initial: initial placement.
+        traffic_lights: signal programs (Flow's ``tls``) and the baseline signal controller.
         train: training settings, for ``flowrun train``.
         source: the YAML file the config was loaded from (``None`` when built in Python). Not a
             YAML key and not compared: an import-path ``env.class`` is also looked for next to
@@ -79,5 +81,6 @@ class ExperimentConfig:
     network: NetworkConfig = field(default_factory=NetworkConfig)
     vehicles: VehicleParams = field(default_factory=VehicleParams)
     initial: InitialConfig = field(default_factory=InitialConfig)
+    traffic_lights: TrafficLightsConfig = field(default_factory=TrafficLightsConfig)
     train: TrainConfig | None = None
     source: str | None = field(default=None, compare=False, metadata={"yaml": False})

@@ -173,6 +173,18 @@ class TrafficLightParams:
                 props["freq"] = freq
         self._tls[node_id] = props
 
+    def __eq__(self, other: object) -> bool:
+        return (
+            isinstance(other, TrafficLightParams)
+            and self.baseline == other.baseline
+            and self._tls == other._tls
+        )
+
+    __hash__ = None  # type: ignore[assignment]  # mutable, like Flow's
+
+    def __repr__(self) -> str:
+        return f"TrafficLightParams(baseline={self.baseline!r}, lights={self._tls!r})"
+
     def get_properties(self) -> dict[str, dict[str, Any]]:
         """Every added light as Flow's dict (``id, type, programID, offset, phases, max-gap,
         detector-gap, show-detectors, file, freq``), by node id."""

@@ -16,6 +16,7 @@ from flowrun.config.params import (
     SumoParams,
     VehicleParams,
 )
+from flowrun.config.signal_control import network_programs
 from flowrun.envs.base import Env, check_additional_params
 from flowrun.envs.registry import resolve_env_class
 from flowrun.errors import ConfigError
@@ -24,9 +25,15 @@ from flowrun.networks.registry import network_class
 
 
 def make_network(cfg: ExperimentConfig) -> Network:
-    """The network object of a config."""
+    """The network object of a config, with its traffic-light programs (the declared ones,
+    or those of ``traffic_lights.controller``)."""
     cls = network_class(cfg.network.type)
-    return cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial)
+    tls = cfg.traffic_lights
+    network = cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial, tls.programs)
+    if tls.controller is not None:
+        lights = [n.id for n in network.spec.nodes if n.type == "traffic_light"]
+        network.traffic_lights = network_programs(tls, lights)
+    return network
 
 
 def env_class(cfg: ExperimentConfig) -> type[Env]:

@@ -9,13 +9,18 @@ becomes the light's active one.
 
 from __future__ import annotations
 
+import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 from xml.sax.saxutils import quoteattr
 
 from flowrun.config.traffic_lights import Phase, TlsProgram, TrafficLightParams
 from flowrun.errors import ConfigError
+
+if TYPE_CHECKING:
+    from flowrun.networks.base import Network
 
 
 @dataclass(frozen=True)
@@ -119,3 +124,17 @@ def write_tls_file(params: TrafficLightParams, net_file: Path, out_dir: Path) ->
     path = out_dir / f"{net_file.name.removesuffix('.net.xml')}.tls.add.xml"
     path.write_text(tls_additional_xml(programs))
     return path
+
+
+def check_programs(network: Network, params: TrafficLightParams) -> None:
+    """Build ``network`` with netconvert (in a temporary folder) and check ``params`` on it.
+
+    Raises:
+        ConfigError: see :func:`resolve_programs`.
+        SimulationError: netconvert failed.
+    """
+    from flowrun.networks.build import build_network
+
+    with tempfile.TemporaryDirectory(prefix="flowrun-tls-") as tmp:
+        net_file = build_network(network.spec, Path(tmp), name=network.network_type or "network")
+        resolve_programs(params, read_net_lights(net_file))
