@@ -11,9 +11,9 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium.spaces import Box
 
-from flowrun.envs.rewards import desired_velocity, wave_attenuation_terms
-from flowrun.envs.ring.accel import acceleration_box
-from flowrun.errors import ConfigError
+from flowrun.envs.rewards import wave_attenuation_terms
+from flowrun.envs.ring.accel import acceleration_box, desired_velocity_reward
+from flowrun.envs.ring.wave_attenuation import ring_bounds
 from flowrun.multiagent.base import MultiAgentEnv
 from flowrun.multiagent.observations import neighbour_obs
 from flowrun.networks.base import Network
@@ -37,28 +37,6 @@ ACCEL_PARAMS: dict[str, Any] = {
 }
 
 V_OBS_SCALE = 15.0  # m/s: Flow's speed normaliser of the wave-attenuation observation
-
-
-def ring_bounds(additional_params: dict[str, Any]) -> tuple[int, int] | None:
-    """``(low, high)`` of the ring length drawn at each reset (m), or ``None`` to keep it.
-
-    Raises:
-        ConfigError: ``ring_length`` is not ``[low, high]`` with ``0 < low <= high``.
-    """
-    given = additional_params["ring_length"]
-    if given is None:
-        return None
-    try:
-        low, high = given
-        ok = 0 < low <= high
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
-        raise ConfigError(
-            f"expected [low, high] with 0 < low <= high (metres) or null, got {given!r}",
-            path="env.additional_params.ring_length",
-        )
-    return int(low), int(high)
 
 
 def flat_actions(rl_actions: dict[str, Any] | None) -> np.ndarray:
@@ -180,13 +158,4 @@ class MultiAgentAccelPOEnv(MultiAgentEnv):
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Shared desired-velocity reward (mean speed when evaluating)."""
-        speeds = self.k.vehicle.speed
-        if self.env_params.evaluate:
-            return float(np.mean(speeds)) if speeds.size else 0.0
-        reward = desired_velocity(
-            speeds,
-            float(self.env_params.additional_params["target_velocity"]),
-            fail=bool(kwargs.get("fail", False)),
-        )
-        self.reward_terms = {"desired_velocity": reward}
-        return reward
+        return desired_velocity_reward(self, bool(kwargs.get("fail", False)))

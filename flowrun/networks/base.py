@@ -150,6 +150,9 @@ class Network:
     """
 
     ADDITIONAL_NET_PARAMS: ClassVar[dict[str, Any]] = {}
+    #: the kind of each parameter (see :func:`flowrun.networks.checks.check_values`),
+    #: checked by :meth:`resolve_params`
+    PARAM_KINDS: ClassVar[dict[str, str]] = {}
     network_type: ClassVar[str] = ""
 
     def __init__(
@@ -183,6 +186,10 @@ class Network:
                     path=key,
                 )
             params[key] = value
+        if cls.PARAM_KINDS:
+            from flowrun.networks.checks import check_values
+
+            check_values(params, cls.PARAM_KINDS)
         return params
 
     def with_params(self, **changes: Any) -> Network:

@@ -13,7 +13,6 @@ from typing import Any, ClassVar
 import numpy as np
 
 from flowrun.networks.base import Edge, Network, NetworkSpec, Node
-from flowrun.networks.checks import check_values
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # length of the highway (without the ghost edge), m
@@ -92,14 +91,8 @@ class HighwayNetwork(Network):
     """
 
     ADDITIONAL_NET_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_NET_PARAMS
+    PARAM_KINDS: ClassVar[dict[str, str]] = KINDS
     network_type: ClassVar[str] = "highway"
-
-    @classmethod
-    def resolve_params(cls, given: dict[str, Any]) -> dict[str, Any]:
-        """Merge with defaults and check each value."""
-        params = super().resolve_params(given)
-        check_values(params, KINDS)
-        return params
 
     def build_spec(self) -> NetworkSpec:
         """The highway's nodes, edges and routes."""

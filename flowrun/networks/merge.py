@@ -13,7 +13,6 @@ import math
 from typing import Any, ClassVar
 
 from flowrun.networks.base import Edge, Network, NetworkSpec, Node
-from flowrun.networks.checks import check_values
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # length of the ramp edge `bottom` that joins the highway, m
@@ -114,14 +113,8 @@ class MergeNetwork(Network):
     """
 
     ADDITIONAL_NET_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_NET_PARAMS
+    PARAM_KINDS: ClassVar[dict[str, str]] = KINDS
     network_type: ClassVar[str] = "merge"
-
-    @classmethod
-    def resolve_params(cls, given: dict[str, Any]) -> dict[str, Any]:
-        """Merge with defaults and check each value."""
-        params = super().resolve_params(given)
-        check_values(params, KINDS)
-        return params
 
     def build_spec(self) -> NetworkSpec:
         """The merge's nodes, edges and routes."""

@@ -253,13 +253,17 @@ class AccelEnv(RingAccelBase):
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired-velocity reward (mean speed when ``env_params.evaluate``)."""
-        speeds = self.k.vehicle.speed
-        if self.env_params.evaluate:
-            return float(np.mean(speeds)) if speeds.size else 0.0
-        reward = desired_velocity(
-            speeds,
-            float(self.env_params.additional_params["target_velocity"]),
-            fail=bool(kwargs.get("fail", False)),
-        )
-        self.reward_terms = {"desired_velocity": reward}
-        return reward
+        return desired_velocity_reward(self, bool(kwargs.get("fail", False)))
+
+
+def desired_velocity_reward(env: Env, fail: bool) -> float:
+    """Flow's desired-velocity reward of ``env`` towards its ``target_velocity`` (0 after a
+    collision; the mean speed when ``env_params.evaluate``); sets ``env.reward_terms``."""
+    speeds = env.k.vehicle.speed
+    if env.env_params.evaluate:
+        return float(np.mean(speeds)) if speeds.size else 0.0
+    reward = desired_velocity(
+        speeds, float(env.env_params.additional_params["target_velocity"]), fail=fail
+    )
+    env.reward_terms = {"desired_velocity": reward}
+    return reward

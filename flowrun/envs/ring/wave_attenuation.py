@@ -28,6 +28,28 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
 V_OBS_SCALE = 15.0  # m/s: speeds in the partial observation are divided by this
 
 
+def ring_bounds(additional_params: dict[str, Any]) -> tuple[int, int] | None:
+    """``(low, high)`` of the ring length drawn at each reset (m), or ``None`` to keep it.
+
+    Raises:
+        ConfigError: ``ring_length`` is not ``[low, high]`` with ``0 < low <= high``.
+    """
+    given = additional_params["ring_length"]
+    if given is None:
+        return None
+    try:
+        low, high = given
+        ok = 0 < low <= high
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise ConfigError(
+            f"expected [low, high] with 0 < low <= high (metres) or null, got {given!r}",
+            path="env.additional_params.ring_length",
+        )
+    return int(low), int(high)
+
+
 class WaveAttenuationEnv(RingAccelBase):
     """Fully observed ring with a redrawn length (Flow's ``WaveAttenuationEnv``).
 
@@ -45,20 +67,7 @@ class WaveAttenuationEnv(RingAccelBase):
 
     def ring_range(self) -> tuple[int, int] | None:
         """``(low, high)`` of the ring length draw, m; ``None`` keeps the network's length."""
-        given = self.env_params.additional_params["ring_length"]
-        if given is None:
-            return None
-        try:
-            low, high = given
-            ok = 0 < low <= high
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:
-            raise ConfigError(
-                f"expected [low, high] with 0 < low <= high (metres) or null, got {given!r}",
-                path="env.additional_params.ring_length",
-            )
-        return int(low), int(high)
+        return ring_bounds(self.env_params.additional_params)
 
     def episode_network(self) -> Network:
         """The ring with a length drawn uniformly from the integers in ``ring_length``."""
