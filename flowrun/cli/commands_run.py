@@ -116,6 +116,19 @@ def metrics_table(title: str, rows: list[Any]) -> Table:
     return table
 
 
+def signals_table(title: str, rows: list[Any]) -> Table:
+    """The signal-control table: one row per run (:class:`SignalMetrics`)."""
+    table = Table(title=title)
+    for col in ("run", "mean delay", "mean travel time", "throughput", "mean queue",
+                "waiting at end"):  # fmt: skip
+        table.add_column(col, justify="right")
+    for i, m in enumerate(rows):
+        table.add_row(str(i), f"{m.mean_delay:.1f} s", f"{m.mean_travel_time:.1f} s",
+                      f"{m.throughput:.0f} veh/h", f"{m.mean_queue:.2f} veh",
+                      str(m.waiting_at_end))  # fmt: skip
+    return table
+
+
 @guarded
 def baseline(
     config: AnyConfigArg,
@@ -177,6 +190,9 @@ def baseline(
                 console.print("[yellow]interrupted[/]: logs finished; metrics.json says so")
                 raise typer.Exit(code=130) from None
     console.print(metrics_table(f"{cfg.name}: {runs} run(s) x {total} steps", result.metrics))
+    if result.signals:
+        how = result.signal_controller or "the network's programs / the env's actions"
+        console.print(signals_table(f"signal control: {how}", result.signals))
     console.print(f"run folder: {result.run_dir}")
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +18,7 @@ from flowrun.errors import ConfigError
 from flowrun.experiment.metrics import RunMetrics
 from flowrun.experiment.rundir import create_run_dir, versions, write_json
 from flowrun.experiment.runner import Experiment, FrameSink
+from flowrun.experiment.signal_baselines import SignalMetrics, SignalRun
 from flowrun.recording.writer import McapRecorder
 
 log = logging.getLogger(__name__)
@@ -34,12 +35,18 @@ class BaselineResult:
         metrics: one entry per completed (or interrupted) run.
         logs: MCAP files written.
         status: ``complete`` or ``interrupted``.
+        signals: on a network with traffic lights, each run's signal metrics (delay, travel
+            time, throughput, queue, cars waiting at the end); empty otherwise.
+        signal_controller: ``traffic_lights.controller`` (``None``: the network's programs
+            or the environment's actions).
     """
 
     run_dir: Path
     metrics: list[RunMetrics]
     logs: list[Path]
     status: str = "complete"
+    signals: list[SignalMetrics] = field(default_factory=list)
+    signal_controller: str | None = None
 
 
 def resolve_steps(cfg: ExperimentConfig, steps: int | None) -> int:
@@ -150,7 +157,11 @@ def run_baseline(
         if progress is not None:
             progress(run, step)
 
-    experiment = Experiment(env, sink_factory=sink if record else None, progress=on_step)
+    has_lights = any(n.type == "traffic_light" for n in env.network.spec.nodes)
+    signals = SignalRun(cfg.traffic_lights) if has_lights else None
+    experiment = Experiment(
+        env, sink_factory=sink if record else None, progress=on_step, hooks=signals
+    )
     status = "interrupted"
     try:
         experiment.run(runs, n_steps, seed=seed)
@@ -158,20 +169,26 @@ def run_baseline(
     finally:
         env.close()
         metrics = experiment.metrics
-        write_json(
-            run_dir / "metrics.json",
-            {
-                "status": status,
-                "config": cfg.name,
-                "seed": seed,
-                "steps_per_run": n_steps,
-                "runs": [m.to_dict() for m in metrics],
-                "logs": [p.name for p in logs],
-            },
-        )
+        signal_runs = signals.results if signals is not None else []
+        runs_data = [m.to_dict() for m in metrics]
+        for row, signal in zip(runs_data, signal_runs, strict=False):
+            row.update(signal.to_dict())
+        summary = {
+            "status": status,
+            "config": cfg.name,
+            "seed": seed,
+            "steps_per_run": n_steps,
+            "runs": runs_data,
+            "logs": [p.name for p in logs],
+        }
+        if signals is not None:
+            summary["signal_controller"] = cfg.traffic_lights.controller
+        write_json(run_dir / "metrics.json", summary)
         if gif_frames:
             write_gif(run_dir / "render.gif", gif_frames)
-    return BaselineResult(run_dir, metrics, logs, status)
+    return BaselineResult(
+        run_dir, metrics, logs, status, signal_runs, cfg.traffic_lights.controller
+    )
 
 
 def write_gif(path: Path, frames: list[Any]) -> None:

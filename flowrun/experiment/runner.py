@@ -38,6 +38,22 @@ DRAIN_EVERY = 256
 #: small; with thousands of cars each step is a big enough batch on its own).
 DRAIN_VEHICLE_STEPS = 1 << 14
 
+class RunHooks(Protocol):
+    """Code that runs with every run (a signal controller and its measurements)."""
+
+    def on_reset(self, env: Env) -> None:
+        """After ``env.reset``."""
+
+    def before_step(self, env: Env) -> None:
+        """Before each ``env.step``."""
+
+    def after_step(self, env: Env) -> None:
+        """After each ``env.step``."""
+
+    def on_run_end(self, env: Env, run: int) -> None:
+        """After the run's last step (also when interrupted)."""
+
+
 SinkFactory = Callable[[int], FrameSink | None]
 Progress = Callable[[int, int], None]
 
@@ -54,6 +70,7 @@ class Experiment:
         progress: called as ``progress(run, step)`` after every step.
         custom_callables: Flow's ``{name: f(env)}``: each is called after every step and the
             mean of its values per run is returned under ``name``.
+        hooks: called after each reset, around each step and at the end of each run.
 
     Attributes:
         env: the environment.
@@ -66,6 +83,7 @@ class Experiment:
         sink_factory: SinkFactory | Mapping[str, Callable[[Env], Any]] | None = None,
         progress: Progress | None = None,
         custom_callables: Mapping[str, Callable[[Env], Any]] | None = None,
+        hooks: RunHooks | None = None,
     ) -> None:
         if isinstance(sink_factory, Mapping):  # Flow's ``Experiment(flow_params, callables)``
             sink_factory, custom_callables = None, sink_factory
@@ -81,6 +99,7 @@ class Experiment:
         self.sink_factory = sink_factory
         self.progress = progress
         self.custom_callables = dict(custom_callables or {})
+        self.hooks = hooks
         self.metrics: list[RunMetrics] = []
         self.csv_files: list[Path] = []
 
@@ -129,6 +148,7 @@ class Experiment:
         self.metrics = []
         self.csv_files = []
         env.record_frames = sink_factory is not None
+        hooks = self.hooks
         for run in range(num_runs):
             sink: FrameSink | None = None
             stats = RunAccumulator()
@@ -138,11 +158,17 @@ class Experiment:
             try:
                 obs, _ = env.reset(seed=None if seed is None else seed + run)
                 sink = sink_factory(run) if sink_factory else None
+                if hooks is not None:
+                    hooks.on_reset(env)
                 vehicles = max(env.k.vehicle.num_vehicles, 1)
                 drain_at = max(1, min(DRAIN_EVERY, DRAIN_VEHICLE_STEPS // vehicles))
                 for step in range(steps):
                     action = rl_actions(obs) if rl_actions is not None else None
+                    if hooks is not None:
+                        hooks.before_step(env)
                     obs, reward, terminated, truncated, _ = env.step(action)
+                    if hooks is not None:
+                        hooks.after_step(env)
                     ret += reward
                     rewards.append(reward)
                     for key, fn in self.custom_callables.items():
@@ -160,6 +186,8 @@ class Experiment:
                     if sink is not None:
                         sink.close()
                     self.metrics.append(stats.result(run, ret))
+                    if hooks is not None:
+                        hooks.on_run_end(env, run)
             returns.append(ret)
             per_step.append(rewards.tolist())
             outflows.append(_outflow(env))
