@@ -108,3 +108,19 @@ def test_tailway_on_the_ring_is_the_followers_headway() -> None:
             assert vk.get_tailway(vid) == pytest.approx(vk.get_headway(follower))
     finally:
         env.close()
+
+
+def test_flows_test_hooks_overwrite_leader_follower_and_headway_until_the_next_step() -> None:
+    env = make_env(load("sugiyama"))
+    try:
+        env.reset(seed=0)
+        vk = env.k.vehicle
+        a, b, c = vk.get_ids()[:3]
+        vk.set_follower(a, c)
+        vk.set_leader(a, None)
+        vk.set_headway(c, 12.5)
+        assert (vk.get_follower(a), vk.get_leader(a), vk.get_headway(c)) == (c, None, 12.5)
+        env.step(None)
+        assert vk.get_follower(a) != c or vk.get_leader(a) is not None
+    finally:
+        env.close()

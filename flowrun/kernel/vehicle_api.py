@@ -148,6 +148,16 @@ class FlowVehicleGetters:
         self.headway = self.headway.copy()  # frames may hold the old array
         self.headway[self.table.row(veh_id)] = headway
 
+    def set_leader(self, veh_id: str, leader: str | None) -> None:
+        """Overwrite the vehicle's leader until the next step (Flow's test hook)."""
+        self.leader = self.leader.copy()
+        self.leader[self.table.row(veh_id)] = self.table.row(leader) if leader else -1
+
+    def set_follower(self, veh_id: str, follower: str | None) -> None:
+        """Overwrite the vehicle's follower until the next step (Flow's test hook)."""
+        self.follower = self.follower.copy()
+        self.follower[self.table.row(veh_id)] = self.table.row(follower) if follower else -1
+
     def test_set_speed(self, veh_id: str, speed: float) -> None:
         """Overwrite the vehicle's speed until the next step (Flow's test hook)."""
         self.speed = self.speed.copy()
