@@ -124,3 +124,22 @@ def test_flows_test_hooks_overwrite_leader_follower_and_headway_until_the_next_s
         assert vk.get_follower(a) != c or vk.get_leader(a) is not None
     finally:
         env.close()
+
+
+def test_rendered_runs_colour_rl_observed_and_other_cars_as_flow() -> None:
+    cfg = load("ring_wave", "sim.render=true", "env.warmup_steps=0")
+    env = make_env(cfg)
+    try:
+        env.reset(seed=0)
+        vk = env.k.vehicle
+        human = vk.get_human_ids()[0]
+        vk.set_observed(human)
+        env.step(np.zeros(1))
+        for vid in vk.get_ids():
+            expected = (255, 0, 0) if vid in vk.get_rl_ids() else (
+                (0, 255, 255) if vid == human else (255, 255, 255)
+            )
+            assert vk.get_color(vid) == expected
+        assert vk.get_observed_ids() == []  # marks last one step
+    finally:
+        env.close()

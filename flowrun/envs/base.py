@@ -300,6 +300,8 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         if action is not None:  # already clipped by ``step``
             self._apply_rl_actions(action)
         self.additional_command()
+        if self.sim_params.render:  # Flow colours cars only when someone watches
+            self.k.vehicle.update_vehicle_colors()
         self.k.step()
         self._emit_frame()
 

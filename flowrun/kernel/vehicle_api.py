@@ -21,6 +21,9 @@ if TYPE_CHECKING:
 #: Flow's value for "no such vehicle" in numeric getters.
 ERROR = -1001.0
 
+#: Flow's vehicle colours (red, green, blue).
+RED, CYAN, WHITE = (255, 0, 0), (0, 255, 255), (255, 255, 255)
+
 
 class FlowVehicleGetters:
     """Flow's getters over the kernel's arrays (see :class:`VehicleKernel`)."""
@@ -132,6 +135,15 @@ class FlowVehicleGetters:
     def remove_observed(self, veh_id: str) -> None:
         """Unmark a vehicle as observed."""
         self._observed.pop(veh_id, None)
+
+    def update_vehicle_colors(self) -> None:
+        """Flow's colours, for a rendered run: RL cars red, observed cars cyan, the other
+        cars white; then the observed marks are cleared (an env marks them every step)."""
+        observed = set(self._observed)
+        for vid, rl in zip(self.table.ids, self.table.is_rl.tolist(), strict=True):
+            color = RED if rl else CYAN if vid in observed else WHITE
+            self.set_color(vid, color)
+        self._observed.clear()
 
     def get_color(self, veh_id: str) -> tuple[int, int, int]:
         """The vehicle's colour (red, green, blue; 0-255)."""
