@@ -115,7 +115,7 @@ def test_flows_test_hooks_overwrite_leader_follower_and_headway_until_the_next_s
     try:
         env.reset(seed=0)
         vk = env.k.vehicle
-        a, b, c = vk.get_ids()[:3]
+        a, _, c = vk.get_ids()[:3]
         vk.set_follower(a, c)
         vk.set_leader(a, None)
         vk.set_headway(c, 12.5)
