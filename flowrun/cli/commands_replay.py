@@ -33,6 +33,8 @@ from flowrun.replay import (
     traffic_series,
 )
 from flowrun.replay.plots import plot_stride
+from flowrun.replay.signal_plots import plot_signals
+from flowrun.replay.signals import intersection_rows, signal_series
 
 
 class PlotKind(StrEnum):
@@ -41,6 +43,7 @@ class PlotKind(StrEnum):
     time_space = "time-space"
     speed = "speed"
     traffic = "traffic"
+    signals = "signals"
     all = "all"
 
 
@@ -80,12 +83,27 @@ def _export_foxglove(
     if out.exists():
         raise RecordingError(f"{out} exists; choose a new path for --foxglove")
     stats = {s.step: s for s in log.stats(start, end)}
+    signals = {s.step: s for s in log.signals(start, end)}
     written = 0
     with McapRecorder(out, metadata=log.metadata, attachments=log.attachments) as rec:
         for frame in log.frames(start, end, vehicles):
             if frame.step in stats:
-                written += rec.write(frame, stats[frame.step])
+                written += rec.write(frame, stats[frame.step], signals.get(frame.step))
     return written
+
+
+def _intersection_table(log: McapLog, start: float | None, end: float | None) -> Table:
+    """Mean queue and delay per traffic light (definitions: :mod:`flowrun.replay.signals`)."""
+    rows = intersection_rows(signal_series(log, start_s=start, end_s=end))
+    table = Table(
+        title=f"intersections - {log.path.name} (queue: cars < 0.1 m/s on the incoming edges; "
+        "delay: time lost vs the speed limit there, per car)"
+    )
+    for name in rows[0] if rows else ("light",):
+        table.add_column(name, justify="left" if name == "light" else "right")
+    for row in rows:
+        table.add_row(*row.values())
+    return table
 
 
 def register(app: typer.Typer) -> None:
@@ -112,7 +130,8 @@ def register(app: typer.Typer) -> None:
             typer.Option(
                 "--plot",
                 help="Write PNG plots: time-space diagram, speeds, traffic (speed, density "
-                "and outflow per minute), or all.",
+                "and outflow per minute), signals (queue per intersection approach with its "
+                "signal shaded; logs of networks with traffic lights), or all.",
             ),
         ] = None,
         route: Annotated[
@@ -202,6 +221,9 @@ def register(app: typer.Typer) -> None:
                 for label, (va, vb, delta) in compare(summaries[0], summaries[1]).items():
                     table.add_row(label, va, vb, delta)
             console.print(table)
+            for lg in opened:
+                if lg.has_signals:
+                    console.print(_intersection_table(lg, start, end))
 
             if csv is not None:
                 rows = to_csv(opened[0], csv, start_s=start, end_s=end, vehicles=chosen)
@@ -244,5 +266,14 @@ def register(app: typer.Typer) -> None:
                         written.append(
                             plot_traffic(lg, folder / f"traffic{suffix}.png", traffic, flow)
                         )
+                if plot is PlotKind.signals and not opened[0].has_signals:
+                    signal_series(opened[0])  # raises the readable "no traffic lights" error
+                if plot in (PlotKind.signals, PlotKind.all):
+                    for i, lg in enumerate(opened):
+                        if lg.has_signals:
+                            suffix = "" if len(opened) == 1 else ("_A", "_B")[i]
+                            lights = signal_series(lg, start_s=start, end_s=end)
+                            png = folder / f"signals{suffix}.png"
+                            written.append(plot_signals(lg, png, lights))
                 for path in written:
                     typer.echo(f"wrote {path}")

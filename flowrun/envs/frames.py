@@ -14,7 +14,7 @@ import numpy.typing as npt
 from flowrun.kernel import Kernel
 from flowrun.kernel.geometry import RingPlacement
 from flowrun.kernel.population import Population
-from flowrun.recording.frames import StepStats, VehicleFrame
+from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -55,6 +55,23 @@ def snapshot_frame(k: Kernel, step: int, deferred: bool = False) -> VehicleFrame
 
 
 _EMPTY = np.zeros(0)
+
+
+def snapshot_signals(k: Kernel, step: int) -> SignalFrame | None:
+    """Every traffic light's state, phase and program at the current step (``None`` on a
+    network without lights). Copies: the kernel updates its lists in place each step."""
+    tk = k.traffic_light
+    if not tk.states:
+        return None
+    return SignalFrame(
+        step=step,
+        time=k.simulation.time,
+        ids=tk.get_ids(),
+        states=list(tk.states),
+        phases=tk.phases.copy(),
+        programs=list(tk.programs),
+    )
+
 
 #: population -> (its version, a private copy of its ids at that version)
 _ID_COPIES: weakref.WeakKeyDictionary[Population, tuple[int, list[str]]] = (
@@ -120,6 +137,7 @@ class StepRecord:
         prev_speed: the speeds of the step before, kept while the frame is incomplete.
         departed: vehicles that entered the network in this step.
         arrived: vehicles that left the network in this step.
+        signals: the traffic lights' states when recording on a network with lights.
     """
 
     step: int
@@ -132,6 +150,7 @@ class StepRecord:
     prev_speed: FloatArray | None = None
     departed: int = 0
     arrived: int = 0
+    signals: SignalFrame | None = None
 
 
 def step_record(k: Kernel, step: int, with_frame: bool, deferred: bool = False) -> StepRecord:
@@ -143,6 +162,7 @@ def step_record(k: Kernel, step: int, with_frame: bool, deferred: bool = False) 
     return StepRecord(
         step, sim.time, vk.speed, sim.step_collisions, sim.step_teleports, frame, math.nan, prev,
         len(vk.departed_ids), len(vk.arrived_ids),
+        snapshot_signals(k, step) if with_frame else None,
     )  # fmt: skip
 
 

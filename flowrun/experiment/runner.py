@@ -16,7 +16,7 @@ from flowrun.envs.base import Env
 from flowrun.envs.frames import batch_stats
 from flowrun.errors import ConfigError
 from flowrun.experiment.metrics import RunAccumulator, RunMetrics
-from flowrun.recording.frames import StepStats, VehicleFrame
+from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
 
 log = logging.getLogger(__name__)
 
@@ -24,8 +24,10 @@ log = logging.getLogger(__name__)
 class FrameSink(Protocol):
     """Where a run's frames go (an MCAP recorder): ``write`` then ``close``."""
 
-    def write(self, frame: VehicleFrame, stats: StepStats) -> object:
-        """Store one step."""
+    def write(
+        self, frame: VehicleFrame, stats: StepStats, signals: SignalFrame | None = None
+    ) -> object:
+        """Store one step (``signals``: only passed on networks with traffic lights)."""
 
     def close(self) -> None:
         """Finish the file (idempotent)."""
@@ -37,6 +39,7 @@ DRAIN_EVERY = 256
 #: ... or fewer on big networks: at most this many vehicle-steps are queued (memory stays
 #: small; with thousands of cars each step is a big enough batch on its own).
 DRAIN_VEHICLE_STEPS = 1 << 14
+
 
 class RunHooks(Protocol):
     """Code that runs with every run (a signal controller and its measurements)."""
@@ -244,8 +247,12 @@ class Experiment:
         stats.add_batch(batch)
         if sink is not None:
             for record, step_stats in zip(records, batch.rows(), strict=True):
-                if record.frame is not None:
+                if record.frame is None:
+                    continue
+                if record.signals is None:
                     sink.write(record.frame, step_stats)
+                else:
+                    sink.write(record.frame, step_stats, record.signals)
 
 
 def _mean(values: list[float]) -> float:

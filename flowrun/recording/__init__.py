@@ -1,18 +1,20 @@
 """MCAP recording of per-step vehicle states: writer, reader (with salvage) and repair."""
 
-from flowrun.recording.frames import StepStats, VehicleFrame
+from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
 from flowrun.recording.reader import McapLog, open_log
 from flowrun.recording.repair import RepairReport, repair
-from flowrun.recording.schema import STATS_TOPIC, VEHICLES_TOPIC
+from flowrun.recording.schema import SIGNALS_TOPIC, STATS_TOPIC, VEHICLES_TOPIC
 from flowrun.recording.writer import METADATA_NAME, McapRecorder
 
 __all__ = [
     "METADATA_NAME",
+    "SIGNALS_TOPIC",
     "STATS_TOPIC",
     "VEHICLES_TOPIC",
     "McapLog",
     "McapRecorder",
     "RepairReport",
+    "SignalFrame",
     "StepStats",
     "VehicleFrame",
     "open_log",

@@ -1,7 +1,8 @@
 """What one logged step holds: column arrays for every vehicle, plus per-step aggregates.
 
 The kernel fills a :class:`VehicleFrame` from its per-step snapshot; the recorder writes it to
-``/flowrun/vehicles`` and a :class:`StepStats` to ``/flowrun/stats``. Readers return the same
+``/flowrun/vehicles`` and a :class:`StepStats` to ``/flowrun/stats`` (and, on networks with
+traffic lights, a :class:`SignalFrame` to ``/flowrun/traffic_lights``). Readers return the same
 types, so a log read back compares equal field by field with what the simulation reported.
 """
 
@@ -99,3 +100,25 @@ class StepStats:
     teleports: int
     departed: int = 0
     arrived: int = 0
+
+
+@dataclass(slots=True)
+class SignalFrame:
+    """Every traffic light at one logged step (``/flowrun/traffic_lights``), one entry per
+    light in each list/array. Treat as read-only, like :class:`VehicleFrame`.
+
+    Attributes:
+        step: simulation step index (the vehicle frame of the same step has the same one).
+        time: simulation time, s.
+        ids: traffic light ids (their junctions' ids).
+        states: SUMO state strings, one character per controlled link (``G``, ``y``, ``r``...).
+        phases: index of the running phase in the light's program.
+        programs: id of the running program (``online`` once a controller set a state).
+    """
+
+    step: int
+    time: float
+    ids: list[str]
+    states: list[str]
+    phases: IntArray
+    programs: list[str]

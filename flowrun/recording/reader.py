@@ -21,7 +21,8 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 
 from flowrun.errors import RecordingError
 from flowrun.recording import schema
-from flowrun.recording.frames import StepStats, VehicleFrame
+from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
+from flowrun.recording.signals import decode_signals
 from flowrun.recording.writer import METADATA_NAME, to_ns
 
 log = logging.getLogger(__name__)
@@ -355,6 +356,23 @@ class McapLog:
         """Per-step aggregates between ``start_s`` and ``end_s`` (inclusive, s)."""
         for _, _, message in self.messages([schema.STATS_TOPIC], start_s, end_s):
             yield schema.decode_stats(message.data)
+
+    @property
+    def has_signals(self) -> bool:
+        """Whether the log has a ``/flowrun/traffic_lights`` topic (a network with lights,
+        logged by a flowrun that records them)."""
+        return self._channel_id(schema.SIGNALS_TOPIC) is not None
+
+    def signals(
+        self, start_s: float | None = None, end_s: float | None = None
+    ) -> Iterator[SignalFrame]:
+        """Every traffic light's state per logged step between ``start_s`` and ``end_s``
+        (inclusive, s); nothing for logs without lights (or written before they were logged).
+        """
+        if not self.has_signals:
+            return
+        for _, _, message in self.messages([schema.SIGNALS_TOPIC], start_s, end_s):
+            yield decode_signals(message.data)
 
 
 def open_log(path: str | os.PathLike[str]) -> McapLog:

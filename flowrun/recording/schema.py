@@ -1,4 +1,4 @@
-"""Protobuf schemas of the two flowrun topics, built in Python (no ``protoc`` step).
+"""Protobuf schemas of the flowrun topics, built in Python (no ``protoc`` step).
 
 Why protobuf: packed doubles keep ``inf``/``nan`` exactly, Foxglove decodes the messages,
 and decoding a 2,200-vehicle frame back to numpy arrays takes ~0.5 ms. JSON needed ~120 µs
@@ -31,6 +31,9 @@ VEHICLES_TOPIC = "/flowrun/vehicles"
 STATS_TOPIC = "/flowrun/stats"
 VEHICLES_TYPE = "flowrun.VehicleFrame"
 STATS_TYPE = "flowrun.StepStats"
+#: Written only on networks with traffic lights (encoded by :mod:`flowrun.recording.signals`).
+SIGNALS_TOPIC = "/flowrun/traffic_lights"
+SIGNALS_TYPE = "flowrun.SignalFrame"
 ENCODING = "protobuf"
 
 _F = descriptor_pb2.FieldDescriptorProto
@@ -83,13 +86,26 @@ _STATS_FIELDS: tuple[tuple[str, int, bool], ...] = (
     ("departed", _F.TYPE_UINT32, False),
     ("arrived", _F.TYPE_UINT32, False),
 )
+SIGNAL_FIELDS: tuple[tuple[str, int, bool], ...] = (
+    ("step", _F.TYPE_UINT64, False),
+    ("time", _F.TYPE_DOUBLE, False),
+    ("ids", _F.TYPE_STRING, True),
+    ("states", _F.TYPE_STRING, True),
+    ("phases", _F.TYPE_INT32, True),
+    ("programs", _F.TYPE_STRING, True),
+)
 
 
 def _file_descriptor() -> descriptor_pb2.FileDescriptorProto:
     fdp = descriptor_pb2.FileDescriptorProto(
         name="flowrun/recording.proto", package="flowrun", syntax="proto3"
     )
-    for msg_name, fields in (("VehicleFrame", _VEHICLE_FIELDS), ("StepStats", _STATS_FIELDS)):
+    messages = (
+        ("VehicleFrame", _VEHICLE_FIELDS),
+        ("StepStats", _STATS_FIELDS),
+        ("SignalFrame", SIGNAL_FIELDS),  # added with traffic lights; older logs lack it
+    )
+    for msg_name, fields in messages:
         msg = fdp.message_type.add(name=msg_name)
         for number, (name, ftype, repeated) in enumerate(fields, start=1):
             label = _F.LABEL_REPEATED if repeated else _F.LABEL_OPTIONAL
@@ -102,14 +118,15 @@ _POOL = descriptor_pool.DescriptorPool()
 _POOL.Add(_FDP)
 VehicleFrameMsg: Any = message_factory.GetMessageClass(_POOL.FindMessageTypeByName(VEHICLES_TYPE))
 StepStatsMsg: Any = message_factory.GetMessageClass(_POOL.FindMessageTypeByName(STATS_TYPE))
+SignalFrameMsg: Any = message_factory.GetMessageClass(_POOL.FindMessageTypeByName(SIGNALS_TYPE))
 
 
 def schema_data() -> bytes:
-    """The serialised ``FileDescriptorSet`` stored in both schema records."""
+    """The serialised ``FileDescriptorSet`` stored in every schema record."""
     return descriptor_pb2.FileDescriptorSet(file=[_FDP]).SerializeToString()
 
 
-def _field_keys(fields: tuple[tuple[str, int, bool], ...]) -> dict[str, bytes]:
+def field_keys(fields: tuple[tuple[str, int, bool], ...]) -> dict[str, bytes]:
     """Encoded key of every field: packed/repeated fields are length-delimited records,
     doubles fixed 64-bit, the other scalars varints."""
     keys = {}
@@ -121,8 +138,8 @@ def _field_keys(fields: tuple[tuple[str, int, bool], ...]) -> dict[str, bytes]:
     return keys
 
 
-_VK = _field_keys(_VEHICLE_FIELDS)
-_SK = _field_keys(_STATS_FIELDS)
+_VK = field_keys(_VEHICLE_FIELDS)
+_SK = field_keys(_STATS_FIELDS)
 _FLOAT_KEYS = tuple(_VK[name] for name in FLOAT_COLUMNS)
 # Keys used on every step. Both messages have step = 1 and time = 2; field numbers below 16
 # make one-byte keys.

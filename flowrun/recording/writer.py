@@ -14,8 +14,9 @@ import numpy as np
 
 from flowrun.errors import RecordingError
 from flowrun.recording import schema
-from flowrun.recording.frames import StepStats, VehicleFrame
+from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
 from flowrun.recording.mcap_file import CHUNK_SIZE, McapWriter
+from flowrun.recording.signals import SignalEncoder
 
 log = logging.getLogger(__name__)
 
@@ -45,7 +46,10 @@ ROSTER_METADATA = "flowrun_roster"
 
 
 class McapRecorder:
-    """Records :class:`VehicleFrame`/:class:`StepStats` pairs to one MCAP file.
+    """Records :class:`VehicleFrame`/:class:`StepStats` pairs to one MCAP file (and the
+    :class:`SignalFrame` of each step on networks with traffic lights: the
+    ``/flowrun/traffic_lights`` channel is registered with the first one, so logs of networks
+    without lights have no such topic).
 
     Metadata and attachments are written first, so even a file cut short by a crash carries
     them. Data is flushed as finished zstd chunks every ``flush_every_s`` seconds of wall
@@ -91,6 +95,9 @@ class McapRecorder:
         self._roster: tuple[list[str], list[str], list[bool]] = ([], [], [])
         self._roster_version = 0
         self._encoder = schema.FrameEncoder()
+        self._signal_encoder = SignalEncoder()
+        self._signals: int | None = None  # channel id, registered with the first SignalFrame
+        self._schema_bytes = b""
         self._departed = self._arrived = 0  # of steps thinned out since the last logged one
         self._closed = False
         try:
@@ -108,7 +115,7 @@ class McapRecorder:
                 self._writer.add_attachment(
                     name, media_type(name), bytes(data), log_time=0, create_time=time.time_ns()
                 )
-            schema_bytes = schema.schema_data()
+            schema_bytes = self._schema_bytes = schema.schema_data()
             vehicles_schema = self._writer.register_schema(
                 schema.VEHICLES_TYPE, schema.ENCODING, schema_bytes
             )
@@ -136,8 +143,15 @@ class McapRecorder:
         self._roster = (list(frame.ids), list(frame.types), is_rl)
         return True
 
-    def write(self, frame: VehicleFrame, stats: StepStats) -> bool:
+    def write(
+        self, frame: VehicleFrame, stats: StepStats, signals: SignalFrame | None = None
+    ) -> bool:
         """Log one step unless thinned out by ``record_every``.
+
+        Args:
+            frame: every vehicle's state.
+            stats: the step's aggregates.
+            signals: every traffic light's state (``None`` on networks without lights).
 
         Returns:
             whether the step was written.
@@ -169,12 +183,24 @@ class McapRecorder:
         # Stats first: if a crash cuts between the two, every salvaged frame has its stats.
         add(self._stats, stamp, schema.encode_stats(stats), stamp, seq)
         add(self._vehicles, stamp, self._encoder.encode(frame, self._roster_version), stamp, seq)
+        if signals is not None:
+            add(self._signal_channel(), stamp, self._signal_encoder.encode(signals), stamp, seq)
         self.frames_written += 1
         now = time.monotonic()
         if now - self._last_flush >= self.flush_every_s or self.frames_written == 1:
             self.flush()
             self._last_flush = now
         return True
+
+    def _signal_channel(self) -> int:
+        if self._signals is None:
+            sid = self._writer.register_schema(
+                schema.SIGNALS_TYPE, schema.ENCODING, self._schema_bytes
+            )
+            self._signals = self._writer.register_channel(
+                schema.SIGNALS_TOPIC, schema.ENCODING, sid
+            )
+        return self._signals
 
     def flush(self) -> None:
         """End the current chunk and push everything written so far to the OS."""
