@@ -105,12 +105,28 @@ class NetworkKernel:
         """Highest speed limit in the network, m/s."""
         return self._max_speed
 
+    def get_junction_list(self) -> list[str]:
+        """Ids of the junction-internal edges (``":center_0"``, ...), Flow's
+        ``get_junction_list``: SUMO's once it has built the network, else the ones the network
+        lists in its edge starts. Empty for the ring (no internal links)."""
+        lanes = self.lanes
+        names = list(lanes.edge_pos) if lanes is not None else list(self._edge_starts)
+        return [e for e in names if e.startswith(":")]
+
     def get_x(self, edge: str, position: float) -> float:
         """Position along the network of ``position`` metres into ``edge`` (-1001 for an
-        unknown edge, as Flow)."""
-        if edge not in self._edge_starts:
+        unknown edge, as Flow).
+
+        Flow's figure eight lists its internal edges by junction (``":bottom"``) where SUMO
+        names them ``":bottom_0"``; a junction name without the index is read as its first
+        internal edge, so Flow code using either name gets the same position.
+        """
+        start = self._edge_starts.get(edge)
+        if start is None and edge.startswith(":"):
+            start = self._edge_starts.get(f"{edge}_0")
+        if start is None:
             return -1001.0
-        return self._edge_starts[edge] + position
+        return start + position
 
     def get_edge(self, x: float) -> tuple[str, float]:
         """Edge and position on it of network position ``x`` (wrapped on closed networks)."""

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from flowrun.kernel.population import Population
+    from flowrun.kernel.population import Population, VehicleTable
     from flowrun.networks.base import NetworkSpec
 
 #: Flow's value for "no such vehicle" in numeric getters.
@@ -29,6 +29,7 @@ class FlowVehicleGetters:
     """Flow's getters over the kernel's arrays (see :class:`VehicleKernel`)."""
 
     table: Population
+    initial: VehicleTable
     spec: NetworkSpec
     dt: float
     api: Any
@@ -283,6 +284,23 @@ class FlowVehicleGetters:
         a = float(self.last_cmd[self.table.row(veh_id)])
         return a if math.isfinite(a) else None
 
+    def get_initial_speed(self, veh_id: str | Sequence[str], error: float | None = ERROR) -> Any:
+        """Speed the vehicle entered the network with, m/s (Flow's ``get_initial_speed``:
+        ``VehicleParams.add(initial_speed=...)``; ``error`` for an id not placed at the start)."""
+        if not isinstance(veh_id, str):
+            return [self.get_initial_speed(v, error) for v in veh_id]
+        rows = self._initial_rows()
+        if veh_id not in rows:
+            return error
+        return float(self.initial.initial_speeds[rows[veh_id]])
+
+    def _initial_rows(self) -> dict[str, int]:
+        rows: dict[str, int] | None = getattr(self, "_initial_row_cache", None)
+        if rows is None:
+            rows = {vid: i for i, vid in enumerate(self.initial.ids)}
+            self._initial_row_cache = rows
+        return rows
+
     def get_max_speed(self, veh_id: str) -> float:
         """The vehicle type's maximum speed, m/s."""
         return float(self.table.max_speeds[self.table.row(veh_id)])
@@ -305,6 +323,13 @@ class FlowVehicleGetters:
     def get_num_arrived(self) -> int:
         """Number of vehicles that left the network in the last step."""
         return len(self.arrived_ids)
+
+    def get_num_not_departed(self) -> int:
+        """Vehicles SUMO has loaded (inflows) but not yet inserted, because there was no room
+        (Flow's ``get_num_not_departed``; 0 before the simulation starts)."""
+        if self.api is None:
+            return 0
+        return len(self.api.simulation.getPendingVehicles())
 
     def get_inflow_rate(self, time_span: float) -> float:
         """Vehicles that entered over the last ``time_span`` seconds, in veh/hour."""
