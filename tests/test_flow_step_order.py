@@ -143,3 +143,24 @@ def test_rendered_runs_colour_rl_observed_and_other_cars_as_flow() -> None:
         assert vk.get_observed_ids() == []  # marks last one step
     finally:
         env.close()
+
+
+def test_flows_starting_positions_and_old_scenario_names() -> None:
+    from flowrun.config.params import InitialConfig
+    from flowrun.networks.base import Network
+    from flowrun.scenarios import Scenario
+
+    assert Scenario is Network
+    env = make_env(load("sugiyama"))
+    try:
+        assert env.k.scenario is env.k.network  # before the first reset too
+        pos, lanes = env.k.network.generate_starting_positions(
+            initial_config=InitialConfig(), num_vehicles=4
+        )
+        # 4 cars evenly over the 230 m ring (no bunching): 57.5 m apart
+        starts = env.k.network.total_edgestarts_dict
+        x = [starts[e] + p for e, p in pos]
+        assert np.diff(x) == pytest.approx([57.5] * 3)
+        assert lanes == [0, 0, 0, 0]
+    finally:
+        env.close()

@@ -123,7 +123,7 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         if sim_params.render and not gui:
             log.warning("render=True but no display or sumo-gui here: running headless")
         self.k = Kernel(sim_params, self.work_dir, gui=gui)
-        self.k.network = NetworkKernel(network.spec)  # Flow: available before the first reset
+        self.k.network = NetworkKernel(network.spec, network=network)  # Flow: before reset
         self.controls: list[GroupControl] = build_controllers(network.vehicles)
         self.step_counter = 0
         self.time_counter = 0

@@ -46,6 +46,11 @@ class Kernel:
         self.net_file: Path | None = None
 
     @property
+    def scenario(self) -> NetworkKernel:
+        """Flow < 0.5 name of :attr:`network`."""
+        return self.network
+
+    @property
     def started(self) -> bool:
         """Whether a simulation is running."""
         return self.process is not None and self.process.api is not None
@@ -82,7 +87,7 @@ class Kernel:
             self.close()
             raise
         lanes = None if spec.closed else LaneTable.read(api, spec)
-        self.network = NetworkKernel(spec, lanes)
+        self.network = NetworkKernel(spec, lanes, network)
         self.vehicle = VehicleKernel(table, spec, self.sim_params.sim_step, rng)
         self.vehicle.read_xy = read_xy
         self.vehicle.attach(api, lanes)

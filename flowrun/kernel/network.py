@@ -3,9 +3,14 @@
 from __future__ import annotations
 
 import bisect
+import copy
+from typing import Any
 
+import numpy as np
+
+from flowrun.config.params import InitialConfig, VehicleParams
 from flowrun.kernel.lanes import LaneTable
-from flowrun.networks.base import NetworkSpec
+from flowrun.networks.base import Network, NetworkSpec
 
 
 class NetworkKernel:
@@ -17,9 +22,12 @@ class NetworkKernel:
             edge starts and lengths.
     """
 
-    def __init__(self, spec: NetworkSpec, lanes: LaneTable | None = None) -> None:
+    def __init__(
+        self, spec: NetworkSpec, lanes: LaneTable | None = None, network: Network | None = None
+    ) -> None:
         self.spec = spec
         self.lanes = lanes
+        self.network = network
         self._edges = {e.id: e for e in spec.edges}
         self._edge_starts = dict(spec.edge_starts if lanes is None else lanes.edge_starts)
         self._starts = sorted(
@@ -27,6 +35,36 @@ class NetworkKernel:
         )
         self._max_speed = max((e.speed for e in spec.edges), default=0.0)
         self._length = spec.length + self._internal_length()
+
+    def generate_starting_positions(
+        self, initial_config: InitialConfig | None = None, num_vehicles: int | None = None,
+        net_params: Any = None,
+    ) -> tuple[list[tuple[str, float]], list[int]]:  # fmt: skip
+        """Flow's starting positions: ``([(edge, position), ...], [lane, ...])``.
+
+        With the network's placement rules and ``initial_config`` (default: the network's
+        own), for ``num_vehicles`` cars of the network's first vehicle type (default: the
+        network's vehicles); draws from a generator seeded with 0.
+
+        Raises:
+            RuntimeError: no network object is known (a kernel built from a bare spec).
+        """
+        if self.network is None:
+            raise RuntimeError("starting positions need the network object; reset the env first")
+        net = copy.copy(self.network)
+        if initial_config is not None:
+            net.initial_config = initial_config
+        if num_vehicles is not None:
+            vehicles = VehicleParams()
+            first = self.network.vehicles.groups[0] if self.network.vehicles.groups else None
+            vehicles.add(
+                "veh",
+                num_vehicles=num_vehicles,
+                car_following_params=first.car_following_params if first else None,
+            )
+            net.vehicles = vehicles
+        start = net.start_positions(np.random.default_rng(0))
+        return list(zip(start.edges, start.lane_pos, strict=True)), list(start.lanes)
 
     def length(self) -> float:
         """Total length of the network, m: its edges plus, once SUMO has built them, its

@@ -2,10 +2,14 @@
 ``Figure8Scenario``/``FigureEightScenario`` the figure eight, ``MergeScenario`` the merge and
 ``HighwayScenario`` the highway."""
 
+from flowrun.networks.base import Network
 from flowrun.networks.figure_eight import Figure8Scenario, FigureEightScenario
 from flowrun.networks.highway import HighwayScenario
 from flowrun.networks.merge import MergeScenario
 from flowrun.networks.ring import LoopScenario
+
+#: Flow < 0.5 name of the network base class
+Scenario = Network
 
 __all__ = [
     "Figure8Scenario",
@@ -13,4 +17,5 @@ __all__ = [
     "HighwayScenario",
     "LoopScenario",
     "MergeScenario",
+    "Scenario",
 ]
