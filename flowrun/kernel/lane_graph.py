@@ -48,3 +48,10 @@ class LaneGraph:
         self.length = lanes.length
         self.edge_index = lanes.edge_index
         self.edge_names = lanes.edge_names
+        # the same as Python lists: the walks read single entries, where lists are faster
+        self.succ_l: list[int] = self.succ.tolist()
+        self.pred_l: list[int] = self.pred.tolist()
+        self.clear_l: list[bool] = self.clear.tolist()
+        self.internal_l: list[bool] = self.internal.tolist()
+        self.length_l: list[float] = self.length.tolist()
+        self.edge_index_l: list[int] = self.edge_index.tolist()

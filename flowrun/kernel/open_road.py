@@ -84,15 +84,17 @@ class Following:
         graph = self.graph if routes is not None else None
         walk = None
         if graph is not None and fronts.size:
-            rear_of = np.full(graph.succ.size, -1, dtype=np.int64)
-            rear_of[lane_key[rears]] = rears
-            front_of = np.full(graph.succ.size, -1, dtype=np.int64)
-            front_of[lane_key[fronts]] = fronts
-            walk = _Walk(graph, lane_key, lane_pos, lengths, rear_of, front_of)
+            keys = lane_key.tolist()
+            rear_list, front_list = rears.tolist(), fronts.tolist()
+            walk = _Walk(
+                graph, keys, lane_pos.tolist(), lengths.tolist(),
+                dict(zip([keys[r] for r in rear_list], rear_list, strict=True)),
+                dict(zip([keys[r] for r in front_list], front_list, strict=True)),
+            )  # fmt: skip
         get_leader, get_follower = self._get_leader, self._get_follower
         for r in fronts.tolist():
             if walk is not None and routes is not None:
-                answer = walk.ahead(r, self._route_next(ids[r], int(lane_key[r]), routes))
+                answer = walk.ahead(r, self._route_next(ids[r], walk.key[r], routes))
                 if answer is not _ASK:
                     if answer is not None:
                         leader[r], headway[r] = answer
@@ -120,10 +122,10 @@ class Following:
         route's end (no leader beyond, as SUMO), -3 unknown (ask SUMO)."""
         graph = self.graph
         assert graph is not None
-        if graph.internal[key]:
+        if graph.internal_l[key]:
             return -1
         route = routes.get(veh_id)
-        edge = graph.edge_names[int(graph.edge_index[key])]
+        edge = graph.edge_names[graph.edge_index_l[key]]
         if not route or edge not in route:
             return -3
         i = route.index(edge)
@@ -142,8 +144,9 @@ _ASK: Any = _Ask()
 class _Walk:
     """Walks the lane graph from a lane's front (rear) car to the next car ahead (behind)."""
 
-    def __init__(self, graph: LaneGraph, lane_key: IntArray, lane_pos: FloatArray,
-                 lengths: FloatArray, rear_of: IntArray, front_of: IntArray) -> None:  # fmt: skip
+    def __init__(self, graph: LaneGraph, lane_key: list[int], lane_pos: list[float],
+                 lengths: list[float], rear_of: dict[int, int],
+                 front_of: dict[int, int]) -> None:  # fmt: skip
         self.g = graph
         self.key = lane_key
         self.pos = lane_pos
@@ -158,41 +161,43 @@ class _Walk:
         if want == -3:
             return _ASK
         g, pos = self.g, self.pos
-        cur = int(self.key[r])
-        dist = float(g.length[cur]) - float(pos[r])
+        succ, pred, internal = g.succ_l, g.pred_l, g.internal_l
+        cur = self.key[r]
+        dist = g.length_l[cur] - pos[r]
         for _ in range(MAX_HOPS):
-            nxt = int(g.succ[cur])
+            nxt = succ[cur]
             # a crossing does not matter ahead (SUMO's leader is on the car's own path), a
             # merge does (a car from the other branch may be the leader)
-            if nxt < 0 or int(g.pred[nxt]) != cur:
+            if nxt < 0 or pred[nxt] != cur:
                 return _ASK
-            if not g.internal[nxt] and want >= 0 and int(g.edge_index[nxt]) != want:
+            if not internal[nxt] and want >= 0 and g.edge_index_l[nxt] != want:
                 return _ASK
-            j = int(self.rear_of[nxt])
+            j = self.rear_of.get(nxt, -1)
             if j >= 0:
-                gap = dist + float(pos[j]) - float(self.lengths[j])
+                gap = dist + pos[j] - self.lengths[j]
                 return (j, gap) if gap <= LOOKAHEAD else _ASK
-            if not g.internal[nxt]:
+            if not internal[nxt]:
                 return _ASK  # the next edge's lane is empty: SUMO looks further
-            dist += float(g.length[nxt])
+            dist += g.length_l[nxt]
             cur = nxt
         return _ASK
 
     def behind(self, r: int) -> Found:
         """The follower of rear car ``r`` and the gap, ``None``, or :data:`_ASK`."""
         g, pos = self.g, self.pos
-        cur = int(self.key[r])
-        dist = float(pos[r]) - float(self.lengths[r])  # from this car's rear to the lane start
+        succ, pred, internal, clear = g.succ_l, g.pred_l, g.internal_l, g.clear_l
+        cur = self.key[r]
+        dist = pos[r] - self.lengths[r]  # from this car's rear to the lane start
         for _ in range(MAX_HOPS):
-            prev = int(g.pred[cur])
-            if prev < 0 or not g.clear[prev] or int(g.succ[prev]) != cur:
+            prev = pred[cur]
+            if prev < 0 or not clear[prev] or succ[prev] != cur:
                 return _ASK
-            j = int(self.front_of[prev])
+            j = self.front_of.get(prev, -1)
             if j >= 0:
-                gap = dist + float(g.length[prev]) - float(pos[j])
+                gap = dist + g.length_l[prev] - pos[j]
                 return (j, gap) if gap <= LOOKAHEAD else _ASK
-            if not g.internal[prev]:
+            if not internal[prev]:
                 return _ASK  # the previous edge's lane is empty: SUMO looks further back
-            dist += float(g.length[prev])
+            dist += g.length_l[prev]
             cur = prev
         return _ASK
