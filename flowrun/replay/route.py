@@ -61,14 +61,7 @@ class NetTopology:
         Raises:
             RecordingError: the bytes are not a SUMO network.
         """
-        try:
-            root = ET.fromstring(net_xml)
-        except ET.ParseError as err:
-            raise RecordingError(f"the log's {NET_ATTACHMENT} is not valid XML: {err}") from err
-        if root.tag != "net":
-            raise RecordingError(
-                f"the log's {NET_ATTACHMENT} is not a SUMO network (root <{root.tag}>)"
-            )
+        root = parse_net_xml(net_xml)
         top = cls()
         for edge in root.iter("edge"):
             lengths = [float(lane.get("length", "0")) for lane in edge.iter("lane")]
@@ -239,3 +232,20 @@ def network_length(log: McapLog) -> float:
         return float(log.metadata.get(LENGTH_KEY, "nan"))
     except ValueError:
         return math.nan
+
+
+def parse_net_xml(net_xml: bytes) -> ET.Element:
+    """The root ``<net>`` element of a log's attached SUMO network.
+
+    Raises:
+        RecordingError: the bytes are not XML, or not a SUMO network.
+    """
+    try:
+        root = ET.fromstring(net_xml)
+    except ET.ParseError as err:
+        raise RecordingError(f"the log's {NET_ATTACHMENT} is not valid XML: {err}") from err
+    if root.tag != "net":
+        raise RecordingError(
+            f"the log's {NET_ATTACHMENT} is not a SUMO network (root <{root.tag}>)"
+        )
+    return root

@@ -21,7 +21,6 @@ sum of its approaches' queues (cars).
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
 from collections import defaultdict
 from dataclasses import dataclass
 from typing import Any
@@ -32,7 +31,7 @@ import numpy.typing as npt
 from flowrun.errors import RecordingError
 from flowrun.recording import McapLog
 from flowrun.recording.frames import FloatArray
-from flowrun.replay.route import NET_ATTACHMENT
+from flowrun.replay.route import NET_ATTACHMENT, parse_net_xml
 
 IntArray = npt.NDArray[np.int64]
 #: Speed below which a car counts as queued, m/s (as ``flowrun.experiment.signal_baselines``).
@@ -113,10 +112,7 @@ def approaches(net_xml: bytes) -> dict[str, tuple[Approach, ...]]:
     Raises:
         RecordingError: the bytes are not a SUMO network.
     """
-    try:
-        root = ET.fromstring(net_xml)
-    except ET.ParseError as err:
-        raise RecordingError(f"the log's {NET_ATTACHMENT} is not valid XML: {err}") from err
+    root = parse_net_xml(net_xml)
     limit: dict[str, float] = {}
     for edge in root.iter("edge"):
         speeds = [float(lane.get("speed", "0")) for lane in edge.iter("lane")]
