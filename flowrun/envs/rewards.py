@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import functools
+import math
+
 import numpy as np
 import numpy.typing as npt
 
@@ -18,10 +21,19 @@ def desired_velocity(speeds: FloatArray, target_velocity: float, fail: bool = Fa
     n = speeds.size
     if fail or n == 0:
         return 0.0
-    # both norms as Flow takes them (the target as a vector), so a perfect score is exactly 1
-    max_cost = float(np.linalg.norm(np.full(n, float(target_velocity))))
-    cost = float(np.linalg.norm(speeds - target_velocity))
+    # both norms as Flow takes them (numpy's norm of a vector is sqrt(x . x)), the target as
+    # a vector: from rest the cost equals the maximum exactly
+    max_cost = _target_norm(n, float(target_velocity))
+    diff = speeds - target_velocity
+    cost = math.sqrt(float(diff.dot(diff)))
     return max(max_cost - cost, 0.0) / (max_cost + FLOAT32_EPS)
+
+
+@functools.lru_cache(maxsize=64)
+def _target_norm(n: int, target_velocity: float) -> float:
+    """The norm of ``n`` cars all at ``target_velocity`` (m/s), as numpy computes it."""
+    target = np.full(n, target_velocity)
+    return math.sqrt(float(target.dot(target)))
 
 
 def wave_attenuation_terms(

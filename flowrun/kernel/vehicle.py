@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections import deque
 from itertools import chain
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -28,6 +28,14 @@ from flowrun.networks.base import NetworkSpec
 _flatten = chain.from_iterable
 
 _NO_ROWS = np.zeros(0, dtype=np.int64)
+
+
+
+#: the per-step arrays an open network finds when first read (see ``_find_following``)
+_FOLLOWING = frozenset(
+    ("leader", "follower", "headway", "tailway", "leader_speed", "follower_speed",
+     "follower_headway")
+)  # fmt: skip
 
 
 class VehicleKernel(VehicleCommands, FlowVehicleGetters):
@@ -53,6 +61,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         dt: float,
         rng: np.random.Generator | None = None,
     ) -> None:
+        self._pending = False  # the following arrays of this step are still to be found
         self.initial = initial
         self.table = Population(initial.classes)
         self.table.add(initial.ids, initial.group.tolist())
@@ -199,13 +208,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             self.prev_speed = speed
         self.speed = speed
         if not self.ring_path:
-            has_lead = self.leader >= 0
-            self.leader_speed = np.where(has_lead, speed[np.where(has_lead, self.leader, 0)], speed)
-            has_fol = self.follower >= 0
-            self.follower_speed = np.where(
-                has_fol, speed[np.where(has_fol, self.follower, 0)], speed
-            )
-            self.follower_headway = self.tailway
+            pass  # found when first asked (see _find_following)
         elif not self._multi_lane and self._following.complete:
             self.leader_speed = speed[self.leader]
             self.follower_speed = speed[self.follower]
@@ -262,10 +265,39 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self._stale_edges = True
         if pop.continuous.any():  # before the look-ahead, which follows the new route
             self._route_continuously(lanes.edge_index[keys])
-        self.leader, self.follower, self.headway, self.tailway = self._following_open.compute(
-            pop, keys, lane_pos, self._route_of
-        )
+        # who follows whom is found when first asked this step (controllers, observations,
+        # frames ask; a step nobody asks — e.g. the first of two sims per env step with
+        # SUMO-driven humans — costs nothing)
+        for name in _FOLLOWING:  # found when first read this step (see __getattr__)
+            self.__dict__.pop(name, None)
+        self._pending = True
         return speed
+
+    if not TYPE_CHECKING:  # for mypy these stay plain typed attributes
+
+        def __getattr__(self, name: str) -> Any:
+            # Reached only for an attribute that is not set: on an open network, the arrays
+            # of who follows whom are found when first read in a step, so a step nobody
+            # asks (the first of two sims per env step with SUMO-driven humans) costs
+            # nothing. The ring sets them every step and never comes here.
+            if name in _FOLLOWING and self.__dict__.get("_pending"):
+                self._find_following()
+                return self.__dict__[name]
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    def _find_following(self) -> None:
+        """Leader, follower, headway, tailway and neighbour speeds of the current step."""
+        self._pending = False
+        assert self._following_open is not None
+        leader, follower, headway, tailway = self._following_open.compute(
+            self.table, self._lane_key, self._lane_pos, self._route_of
+        )
+        speed = self.speed
+        has_lead, has_fol = leader >= 0, follower >= 0
+        self.leader, self.follower, self.headway, self.tailway = leader, follower, headway, tailway
+        self.leader_speed = np.where(has_lead, speed[np.where(has_lead, leader, 0)], speed)
+        self.follower_speed = np.where(has_fol, speed[np.where(has_fol, follower, 0)], speed)
+        self.follower_headway = tailway
 
     def _derive_edges(self) -> None:
         if self._stale_edges and not self.ring_path:

@@ -228,7 +228,10 @@ class AccelEnv(RingAccelBase):
             if vk.num_rl_vehicles > 0:
                 for veh_id in vk.get_human_ids():
                     vk.set_observed(veh_id)
-        self._positions.update(vk, self.k.network.length())
+        # on a ring the absolute position is the ring position itself, so the bookkeeping is
+        # only kept where it differs (other networks) or orders the observation
+        if self._sorting or not self.network.spec.closed:
+            self._positions.update(vk, self.k.network.length())
 
     # ------------------------------------------------------------------ Flow's hooks
     def _apply_rl_actions(self, rl_actions: Any) -> None:
