@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections import deque
 from itertools import chain
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -53,6 +53,9 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         dt: simulation step, s.
         rng: the generator route choices are drawn from (``ContinuousRouter``).
     """
+
+    #: find who follows whom only when first asked in a step (see OpenVehicleKernel)
+    LAZY_FOLLOWING: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -268,22 +271,13 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         # who follows whom is found when first asked this step (controllers, observations,
         # frames ask; a step nobody asks — e.g. the first of two sims per env step with
         # SUMO-driven humans — costs nothing)
-        for name in _FOLLOWING:  # found when first read this step (see __getattr__)
-            self.__dict__.pop(name, None)
         self._pending = True
+        if self.LAZY_FOLLOWING:  # found when first read this step (OpenVehicleKernel)
+            for name in _FOLLOWING:
+                self.__dict__.pop(name, None)
+        else:
+            self._find_following()
         return speed
-
-    if not TYPE_CHECKING:  # for mypy these stay plain typed attributes
-
-        def __getattr__(self, name: str) -> Any:
-            # Reached only for an attribute that is not set: on an open network, the arrays
-            # of who follows whom are found when first read in a step, so a step nobody
-            # asks (the first of two sims per env step with SUMO-driven humans) costs
-            # nothing. The ring sets them every step and never comes here.
-            if name in _FOLLOWING and self.__dict__.get("_pending"):
-                self._find_following()
-                return self.__dict__[name]
-            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def _find_following(self) -> None:
         """Leader, follower, headway, tailway and neighbour speeds of the current step."""
@@ -483,4 +477,26 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             length=self.table.lengths[idx],
         )
 
+
+class OpenVehicleKernel(VehicleKernel):
+    """The vehicle kernel on a network other than a closed ring: the same kernel, with the
+    arrays of who follows whom found when first read in a step.
+
+    (A class of its own because a ``__getattr__`` slows every attribute read of its class in
+    CPython; the ring's hot path reads the kernel's attributes many times per step.)
+    """
+
+    LAZY_FOLLOWING: ClassVar[bool] = True
+
+    if not TYPE_CHECKING:  # for mypy these stay plain typed attributes
+
+        def __getattr__(self, name: str) -> Any:
+            # Reached only for an attribute that is not set: on an open network, the arrays
+            # of who follows whom are found when first read in a step, so a step nobody
+            # asks (the first of two sims per env step with SUMO-driven humans) costs
+            # nothing. The ring sets them every step and never comes here.
+            if name in _FOLLOWING and self.__dict__.get("_pending"):
+                self._find_following()
+                return self.__dict__[name]
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
