@@ -16,7 +16,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from flowrun.errors import ConfigError
-from flowrun.networks.base import Connection, Edge, NetworkSpec, Node, RouteChoice
+from flowrun.networks.base import Connection, Edge, NetworkSpec, Node
+from flowrun.networks.template import parse_routes
 from flowrun.suggest import did_you_mean
 
 
@@ -30,7 +31,9 @@ def spec_from_hooks(network: Any) -> NetworkSpec:
     edges = tuple(_edge(e, types, node_xy, name) for e in network.specify_edges(net_params) or ())
     edge_ids = {e.id for e in edges}
     connections = _connections(network.specify_connections(net_params), edge_ids, name)
-    routes, choices = _routes(network.specify_routes(net_params) or {}, edge_ids, name)
+    routes, choices = parse_routes(
+        network.specify_routes(net_params) or {}, edge_ids, None, f"{name}.specify_routes"
+    )
     starts = dict(network.specify_edge_starts() or ())
     if not starts:  # Flow's default: edges laid end to end in the order given
         at = 0.0
@@ -123,37 +126,3 @@ def _connections(given: Any, edges: set[str], owner: str) -> tuple[Connection, .
                        int(c.get("toLane", 0)))
         )
     return tuple(out)
-
-
-def _routes(
-    given: Mapping[str, Any], edges: set[str], owner: str
-) -> tuple[dict[str, tuple[str, ...]], dict[str, tuple[RouteChoice, ...]]]:
-    routes: dict[str, tuple[str, ...]] = {}
-    choices: dict[str, tuple[RouteChoice, ...]] = {}
-    where = f"{owner}.specify_routes"
-    for start, value in given.items():
-        if start not in edges:
-            raise ConfigError(
-                f"{where}: {start!r} is not an edge{did_you_mean(str(start), edges)} (routes "
-                "per vehicle id are not supported: key each route by the edge it starts on)"
-            )
-        items = list(value)
-        if all(isinstance(x, str) for x in items):
-            options: list[RouteChoice] = [(tuple(items), 1.0)]
-        else:
-            options = [(tuple(route), float(p)) for route, p in items]
-        total = sum(p for _, p in options)
-        if abs(total - 1.0) > 1e-6:
-            raise ConfigError(f"{where}: route probabilities of {start!r} sum to {total:g}, "
-                              "expected 1")  # fmt: skip
-        for route, _ in options:
-            unknown = [e for e in route if e not in edges]
-            if unknown or route[0] != start:
-                raise ConfigError(
-                    f"{where}: route {list(route)} of {start!r} must start on it and use "
-                    f"existing edges (unknown: {unknown})"
-                )
-        routes[start] = max(options, key=lambda o: o[1])[0]
-        if len(options) > 1:
-            choices[start] = tuple(options)
-    return routes, choices

@@ -59,9 +59,12 @@ def read_net(path: Path) -> tuple[tuple[Node, ...], tuple[Edge, ...], set[tuple[
 
 
 def parse_routes(
-    given: Mapping[str, Any], edges: set[str], links: set[tuple[str, str]], net_file: str
+    given: Mapping[str, Any], edges: set[str], links: set[tuple[str, str]] | None, net_file: str
 ) -> tuple[dict[str, tuple[str, ...]], dict[str, tuple[RouteChoice, ...]]]:
     """Flow's ``specify_routes`` forms as (most likely route, choices) per start edge.
+
+    ``links`` (edge pairs a lane connects) checks that each route is connected; ``None``
+    skips that check (a network not built yet). ``net_file`` names the source in messages.
 
     Raises:
         ConfigError: unknown edge, unconnected consecutive edges, or probabilities that do
@@ -109,7 +112,8 @@ def _is_choice(x: Any) -> bool:
 
 
 def _check_route(start: str, route: tuple[str, ...], edges: set[str],
-                 links: set[tuple[str, str]], net_file: str, where: str) -> None:  # fmt: skip
+                 links: set[tuple[str, str]] | None, net_file: str,
+                 where: str) -> None:  # fmt: skip
     if not route or route[0] != start:
         raise ConfigError(f"a route must begin on its start edge '{start}', got {list(route)}",
                           path=where)  # fmt: skip
@@ -119,7 +123,7 @@ def _check_route(start: str, route: tuple[str, ...], edges: set[str],
                 f"no edge '{edge}' in {net_file}{did_you_mean(edge, edges)}", path=where
             )
     for a, b in itertools.pairwise(route):
-        if (a, b) not in links:
+        if links is not None and (a, b) not in links:
             raise ConfigError(
                 f"the route goes from '{a}' to '{b}' but {net_file} connects no lane of "
                 f"'{a}' to '{b}'",
