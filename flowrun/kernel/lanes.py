@@ -52,6 +52,12 @@ class LaneTable:
         self.length = np.array([length for _, length, _ in lanes], dtype=np.float64)
         self.speed_limit = np.array([speed for _, _, speed in lanes], dtype=np.float64)
         self.internal = np.array([lane.startswith(":") for lane, _, _ in lanes], dtype=bool)
+        #: every edge (internal ones included): (number of lanes, length m, speed limit m/s),
+        #: the longest / fastest of its lanes
+        self.edge_facts: dict[str, tuple[int, float, float]] = {}
+        for (_, length, speed), e in zip(lanes, edge_index, strict=True):
+            n, ln, v = self.edge_facts.get(self.edge_names[e], (0, 0.0, 0.0))
+            self.edge_facts[self.edge_names[e]] = (n + 1, max(ln, length), max(v, speed))
         self.edge_starts = edge_starts(spec, lanes, links)
         self.start = np.array(
             [self.edge_starts.get(self.edge_names[e], np.nan) for e in edge_index],

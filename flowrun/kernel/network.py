@@ -72,23 +72,21 @@ class NetworkKernel:
         return self._length
 
     def _internal_length(self) -> float:
-        lanes = self.lanes
-        if lanes is None or not lanes.internal.any():
+        if self.lanes is None:
             return 0.0
-        longest: dict[int, float] = {}
-        for e, ln in zip(lanes.edge_index[lanes.internal].tolist(),
-                         lanes.length[lanes.internal].tolist(), strict=True):  # fmt: skip
-            longest[e] = max(longest.get(e, 0.0), ln)
-        return float(sum(longest.values()))
+        facts = self.lanes.edge_facts
+        return float(sum(f[1] for e, f in facts.items() if e.startswith(":")))
 
     def edge_length(self, edge_id: str) -> float:
         """Length of one edge, m (internal edges included; -1001 for an unknown edge)."""
         if edge_id in self._edges:
             return self._edges[edge_id].length
-        lanes = self.lanes
-        if lanes is not None and edge_id in lanes.edge_pos:
-            return float(lanes.length[lanes.edge_index == lanes.edge_pos[edge_id]].max())
-        return -1001.0
+        facts = self._facts(edge_id)
+        return -1001.0 if facts is None else facts[1]
+
+    def _facts(self, edge_id: str) -> tuple[int, float, float] | None:
+        """(lanes, length, speed limit) of an edge SUMO built (junction-internal ones too)."""
+        return None if self.lanes is None else self.lanes.edge_facts.get(edge_id)
 
     def non_internal_length(self) -> float:
         """Total length of the non-internal edges, m."""
@@ -102,19 +100,15 @@ class NetworkKernel:
         """Number of lanes of an edge (-1001 for an unknown edge, as Flow)."""
         if edge_id in self._edges:
             return self._edges[edge_id].lanes
-        lanes = self.lanes
-        if lanes is not None and edge_id in lanes.edge_pos:
-            return int((lanes.edge_index == lanes.edge_pos[edge_id]).sum())
-        return -1001
+        facts = self._facts(edge_id)
+        return -1001 if facts is None else facts[0]
 
     def speed_limit(self, edge_id: str) -> float:
         """Speed limit of an edge, m/s (-1001 for an unknown edge, as Flow)."""
         if edge_id in self._edges:
             return self._edges[edge_id].speed
-        lanes = self.lanes
-        if lanes is not None and edge_id in lanes.edge_pos:
-            return float(lanes.speed_limit[lanes.edge_index == lanes.edge_pos[edge_id]].max())
-        return -1001.0
+        facts = self._facts(edge_id)
+        return -1001.0 if facts is None else facts[2]
 
     def next_edge(self, edge: str, lane: int) -> list[tuple[str, int]]:
         """The (edge, lane) pairs lane ``lane`` of ``edge`` leads to (empty if none/unknown).

@@ -130,8 +130,6 @@ class VehicleCommands:
         edge = self._edge_by_id.get(edge_id)
         if edge is not None:
             return edge.lanes
-        lanes = self._lanes
-        if lanes is not None and edge_id in lanes.edge_pos:
-            return int((lanes.edge_index == lanes.edge_pos[edge_id]).sum())
-        return 1
+        facts = None if self._lanes is None else self._lanes.edge_facts.get(edge_id)
+        return 1 if facts is None else facts[0]
 
