@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Iterable, Sequence
+from itertools import islice
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -341,10 +342,11 @@ class FlowVehicleGetters:
 
     def _rate(self, time_span: float, column: int) -> float:
         steps = max(1, round(time_span / self.dt))
-        counts = list(self._flow_counts)[-steps:]
+        # the last ``steps`` entries only (the deque keeps up to 100,000 steps)
+        counts = [c[column] for c in islice(reversed(self._flow_counts), steps)]
         if not counts:
             return 0.0
-        return sum(c[column] for c in counts) * 3600.0 / (len(counts) * self.dt)
+        return sum(counts) * 3600.0 / (len(counts) * self.dt)
 
     # ------------------------------------------------------------------ lanes around a car
     def _edge_neighbours(self, veh_id: str) -> tuple[np.ndarray, np.ndarray, int]:
