@@ -7,15 +7,13 @@ from typing import Any
 
 import numpy as np
 
-from flowrun.config.params import LANE_CHANGE_MODES, SPEED_MODES, VehicleParams
+from flowrun.config.params import VehicleParams
 from flowrun.controllers.base import AccelerationController
 from flowrun.controllers.registry import build_controller, resolve_controller
 from flowrun.controllers.view import VehicleControllerView
-from flowrun.errors import ConfigError
 from flowrun.kernel.population import Population, VehicleClass, VehicleTable
 from flowrun.networks.base import NetworkSpec, StartPositions
 from flowrun.networks.routes import route_name
-from flowrun.suggest import unknown_name
 
 
 @dataclass
@@ -52,15 +50,6 @@ class GroupControl:
         self._set_slice()
         if self.index.size != old:
             self.controller.reset(self.index.size)
-
-
-def mode_value(mode: str | int, table: dict[str, int], what: str) -> int:
-    """A Flow mode name (or a raw SUMO int) as SUMO's integer bit set."""
-    if isinstance(mode, int) and not isinstance(mode, bool):
-        return mode
-    if mode not in table:
-        raise ConfigError(unknown_name(what, str(mode), table))
-    return table[mode]
 
 
 def build_controllers(vehicles: VehicleParams) -> list[GroupControl]:
@@ -108,17 +97,17 @@ def build_table(
                 is_rl=bool(c.is_rl),
                 commanded=bool(c.commands_sumo and not c.is_rl),
                 continuous=routed,
-                lane_controlled=g.lane_change_controller.type
-                not in ("SimLaneChangeController", "SimLaneChange"),
+                lane_controlled=bool(
+                    resolve_controller(g.lane_change_controller.type).commands_sumo
+                ),
                 length=float(cf.length),
                 min_gap=float(cf.min_gap),
                 max_speed=float(cf.max_speed),
                 accel=float(cf.accel),
                 decel=float(cf.decel),
-                speed_mode=mode_value(cf.speed_mode, SPEED_MODES, "speed_mode"),
-                lane_change_mode=mode_value(
-                    g.lane_change_params.lane_change_mode, LANE_CHANGE_MODES, "lane_change_mode"
-                ),
+                # stored as SUMO's ints by the parameter classes (a name is turned into one)
+                speed_mode=int(cf.speed_mode),
+                lane_change_mode=int(g.lane_change_params.lane_change_mode),
             )
         )
         for i in range(g.num_vehicles):
