@@ -9,6 +9,8 @@ Modes:
     exp  ``Experiment.run`` of ``configs/sugiyama.yaml`` (what ``flowrun baseline --no-record``
          runs per step: flowrun IDM, commands, per-step statistics).
     rec  ``exp`` plus an MCAP recorder (what ``flowrun baseline`` runs per step).
+    merge  ``Experiment.run`` of ``configs/merge.yaml`` (Flow's merge0, an open network; one
+         "step" here is one env step of two simulation steps).
 """
 
 from __future__ import annotations
@@ -17,12 +19,15 @@ import sys
 import tempfile
 from pathlib import Path
 
+from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
 from flowrun.experiment.runner import Experiment
 from flowrun.recording.writer import McapRecorder
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from ring import Ring, config, time_floor  # bench/ring.py, beside this file
+
+CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 
 
 def main() -> None:
@@ -31,6 +36,12 @@ def main() -> None:
     ring = Ring("", scale, steps, 0)  # scale 100: 2,200 cars on 23 km, as bench/ring.py
     if mode == "raw":
         time_floor(ring)  # SUMO's own IDM, many-lap routes, simulationStep only
+        return
+    if mode == "merge":
+        merge = load_config(CONFIGS / "merge.yaml", [f"env.horizon={steps}"])
+        env = make_env(merge)
+        Experiment(env).run(1, steps, seed=0)
+        env.close()
         return
     env = make_env(config("sugiyama", ring, f"env.horizon={steps}"))
     with tempfile.TemporaryDirectory() as tmp:

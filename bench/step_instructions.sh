@@ -3,6 +3,7 @@
 # Run from the repository root: bash bench/step_instructions.sh   (needs valgrind; ~4 min)
 # The 2,200-car ring instead: SCALE=100 STEPS="60 160" MODES="raw exp" bash bench/step_instructions.sh
 # (~10 min)
+# Flow's merge0 (open network), per env step of two sims: MODES=merge STEPS="300 600" bash ...
 #
 # Each mode runs twice (500 and 2,500 steps); the difference / 2,000 is the cost of one step,
 # start-up cancelled out. The count is repeatable to the instruction only with: one BLAS
@@ -21,7 +22,7 @@ count() {  # mode steps -> instructions of the whole process
 }
 "$PY" bench/step_instructions.py raw 10  # compile every module once, outside the counts
 per_raw=0 per_exp=0 per_rec=0
-for mode in ${MODES:-raw exp rec}; do
+for mode in ${MODES:-raw exp rec}; do  # raw exp rec merge
   a=$(count "$mode" "$SHORT"); b=$(count "$mode" "$LONG")
   per=$(( (b - a) / (LONG - SHORT) ))
   echo "$mode: $per instructions/step"
