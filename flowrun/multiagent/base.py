@@ -18,7 +18,9 @@ from gymnasium.spaces import Box
 from pettingzoo import ParallelEnv
 
 from flowrun.envs.base import Env
+from flowrun.envs.ring.accel import acceleration_box
 from flowrun.multiagent.agents import possible_agent_ids
+from flowrun.multiagent.observations import NEIGHBOUR_HIGH, NEIGHBOUR_LOW
 
 log = logging.getLogger(__name__)
 
@@ -244,3 +246,17 @@ class MultiAgentEnv(Env, ParallelEnv[str, Obs, Action]):
 
 #: Flow's name of the multi-agent base class (``flow.envs.multiagent.MultiEnv``).
 MultiEnv = MultiAgentEnv
+
+
+class NeighbourAgentsEnv(MultiAgentEnv):
+    """Agents that see Flow's 5-value neighbour observation and set one acceleration."""
+
+    @property
+    def agent_observation_space(self) -> Box:
+        """Five normalised values (see :func:`~flowrun.multiagent.observations.neighbour_obs`)."""
+        return Box(low=NEIGHBOUR_LOW, high=NEIGHBOUR_HIGH, dtype=np.float32)
+
+    @property
+    def agent_action_space(self) -> Box:
+        """One acceleration, m/s^2."""
+        return acceleration_box(self.env_params.additional_params, 1)

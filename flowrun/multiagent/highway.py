@@ -9,13 +9,11 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import numpy as np
-from gymnasium.spaces import Box
 
 from flowrun.envs.merge import ETA_HEADWAY, ETA_VELOCITY, time_headway_penalty
 from flowrun.envs.rewards import desired_velocity
-from flowrun.envs.ring.accel import acceleration_box
-from flowrun.multiagent.base import MultiAgentEnv
-from flowrun.multiagent.observations import NEIGHBOUR_HIGH, NEIGHBOUR_LOW, neighbour_obs
+from flowrun.multiagent.base import NeighbourAgentsEnv
+from flowrun.multiagent.observations import neighbour_obs
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     # maximum acceleration of the AVs, m/s^2
@@ -46,7 +44,7 @@ def highway_agent_reward(
     return max(ETA_VELOCITY * r_velocity + ETA_HEADWAY * penalty, 0.0)
 
 
-class MultiAgentHighwayPOEnv(MultiAgentEnv):
+class MultiAgentHighwayPOEnv(NeighbourAgentsEnv):
     """Partially observed multi-agent highway (Flow's ``MultiAgentHighwayPOEnv``).
 
     Observation (per agent, 5 values): Flow's neighbour 5-vector ``v / V``,
@@ -64,16 +62,6 @@ class MultiAgentHighwayPOEnv(MultiAgentEnv):
     """
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
-
-    @property
-    def agent_observation_space(self) -> Box:
-        """Five normalised values (see the class docstring)."""
-        return Box(low=NEIGHBOUR_LOW, high=NEIGHBOUR_HIGH, dtype=np.float32)
-
-    @property
-    def agent_action_space(self) -> Box:
-        """One acceleration, m/s^2."""
-        return acceleration_box(self.env_params.additional_params, 1)
 
     def additional_command(self) -> None:
         """Flow's: mark each agent's leader and follower observed."""

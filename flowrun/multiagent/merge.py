@@ -11,12 +11,10 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import numpy as np
-from gymnasium.spaces import Box
 
 from flowrun.envs.merge import merge_reward
-from flowrun.envs.ring.accel import acceleration_box
-from flowrun.multiagent.base import MultiAgentEnv
-from flowrun.multiagent.observations import NEIGHBOUR_HIGH, NEIGHBOUR_LOW, neighbour_obs
+from flowrun.multiagent.base import NeighbourAgentsEnv
+from flowrun.multiagent.observations import neighbour_obs
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     # maximum acceleration of the AVs, m/s^2
@@ -28,7 +26,7 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
 }
 
 
-class MultiAgentMergePOEnv(MultiAgentEnv):
+class MultiAgentMergePOEnv(NeighbourAgentsEnv):
     """Partially observed multi-agent merge (Flow's ``MultiAgentMergePOEnv``).
 
     Every AV in the network is an agent (there is no ``num_rl`` cap, as in Flow).
@@ -55,16 +53,6 @@ class MultiAgentMergePOEnv(MultiAgentEnv):
         self.leader: list[str] = []
         self.follower: list[str] = []
         super().__init__(*args, **kwargs)
-
-    @property
-    def agent_observation_space(self) -> Box:
-        """Five normalised values (see the class docstring)."""
-        return Box(low=NEIGHBOUR_LOW, high=NEIGHBOUR_HIGH, dtype=np.float32)
-
-    @property
-    def agent_action_space(self) -> Box:
-        """One acceleration, m/s^2."""
-        return acceleration_box(self.env_params.additional_params, 1)
 
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
