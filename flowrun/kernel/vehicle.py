@@ -407,7 +407,6 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         carried = np.where(kept, src, 0)
         self._route_end = np.where(kept, old_route_end[carried] if old_route_end.size else -1, -1)
         self.speed = np.where(kept, old_speed[carried] if old_speed.size else 0.0, 0.0)
-        self.prev_speed = self.speed
         self.last_cmd = np.full(n, np.nan)
         self._no_cmd = np.full(n, np.nan)
         self.accel_cmd = self._no_cmd.copy()
