@@ -32,6 +32,8 @@ Check = Callable[[Any], str | None]
 
 ALGORITHMS = ("PPO", "A2C", "SAC", "TD3", "DDPG", "TRPO")
 SPACINGS = ("uniform", "random", "custom")
+SIM_BACKENDS = ("sumo", "numpy")
+TRAIN_BACKENDS = ("sb3", "rllib")
 
 
 def positive(hint: str = "") -> Check:
@@ -112,6 +114,7 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (SumoParams, "num_clients"): at_least(1),
     (SumoParams, "sight_radius"): at_least(0),
     (SumoParams, "pxpm"): positive(),
+    (SumoParams, "backend"): one_of("sim backend", SIM_BACKENDS),
     (EnvParams, "horizon"): positive("use .inf for no limit"),
     (EnvParams, "warmup_steps"): at_least(0),
     (EnvParams, "sims_per_step"): at_least(1),
@@ -148,6 +151,7 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (TrainConfig, "eval_freq"): at_least(0),
     (TrainConfig, "eval_episodes"): at_least(1),
     (TrainConfig, "checkpoint_freq"): at_least(0),
+    (TrainConfig, "backend"): one_of("training backend", TRAIN_BACKENDS),
 }
 
 # Network parameters shared by Flow's networks; checked here when present, whatever the type.

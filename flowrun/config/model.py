@@ -42,6 +42,7 @@ class TrainConfig:
         eval_freq: evaluate every this many environment steps (0 = never during training).
         eval_episodes: episodes per evaluation and in the final evaluation.
         checkpoint_freq: save a checkpoint every this many environment steps (0 = never).
+        backend: ``sb3`` (stable-baselines3, default) or ``rllib`` (Ray RLlib).
     """
 
     algorithm: str = "PPO"
@@ -55,6 +56,7 @@ class TrainConfig:
     eval_freq: int = 0
     eval_episodes: int = 1
     checkpoint_freq: int = 0
+    backend: str = "sb3"
 
 
 @dataclass(frozen=True)

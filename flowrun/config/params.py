@@ -64,6 +64,8 @@ class SumoParams:
         force_color_update, color_by_speed: Flow's sumo-gui colouring switches. Stored only.
         disable_collisions: later Flow's switch for SUMO's collision checks. Stored only
             (flowrun always counts collisions).
+        backend: ``sumo`` (default: SUMO through libsumo) or ``numpy`` (flowrun's vectorised
+            single-lane ring, many rings stepped at once; flowrun's addition).
     """
 
     YAML_KEYS: ClassVar[dict[str, str]] = {"step": "sim_step"}
@@ -88,6 +90,7 @@ class SumoParams:
     force_color_update: bool = False
     color_by_speed: bool = False
     disable_collisions: bool = False
+    backend: str = "sumo"
 
 
 @dataclass
