@@ -43,6 +43,13 @@ class TrainConfig:
         eval_episodes: episodes per evaluation and in the final evaluation.
         checkpoint_freq: save a checkpoint every this many environment steps (0 = never).
         backend: ``sb3`` (stable-baselines3, default) or ``rllib`` (Ray RLlib).
+        num_env_runners: RLlib only: env runners (one process and one SUMO each); ``None``
+            uses ``n_envs``; 0 samples in the driver process.
+        rllib: RLlib only: PPO settings under RLlib's own names (``lr``, ``gamma``,
+            ``train_batch_size_per_learner``, ``minibatch_size``, ``num_epochs``, ...),
+            checked by ``flowrun.training.rllib``.
+        policies: RLlib multi-agent only: ``shared`` (one policy for all agents), ``group``
+            (one per vehicle group) or ``agent`` (one per agent).
     """
 
     algorithm: str = "PPO"
@@ -57,6 +64,9 @@ class TrainConfig:
     eval_episodes: int = 1
     checkpoint_freq: int = 0
     backend: str = "sb3"
+    num_env_runners: int | None = None
+    rllib: dict[str, Any] = field(default_factory=dict)
+    policies: str = "shared"
 
 
 @dataclass(frozen=True)
