@@ -1,14 +1,36 @@
-"""Run folders: ``runs/<config-name>/<timestamp>-<seed>/``, never overwritten.
+"""Run folders: ``runs/<config-name>/<timestamp>-<seed>/``, never overwritten, always labelled.
 
-Each holds the resolved config, the command line, the versions, ``metrics.json`` and logs.
+Each folder holds the resolved config, the command line, the versions, ``metrics.json``, the
+logs, and ``status.json``: what became of the run. The life of a run folder::
+
+    run_dir = start_run(out, cfg, seed, argv)   # folder + status "running" (pid, host)
+    with tracked_run(run_dir):                  # at the end: "complete", "interrupted"
+        ...                                     # (exit 130/143) or "failed" (+ the error)
+
+A run killed outright (SIGKILL, power cut) keeps ``status: running``; :func:`read_status` sees
+that its process is gone and answers ``cut``, so no later command takes it for finished. Use
+:func:`is_complete` before trusting a folder's results.
+
+``status.json`` holds the wall-clock facts (pid, host, times); ``metrics.json`` holds only what
+the run measured, so two runs with the same seed write the same ``metrics.json``.
 """
 
 from __future__ import annotations
 
+import errno
 import json
+import logging
+import math
+import os
 import platform
 import shlex
+import shutil
+import signal
+import socket
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -16,7 +38,9 @@ from typing import Any
 
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
-from flowrun.errors import FlowrunError
+from flowrun.errors import ConfigError, FlowrunError
+
+log = logging.getLogger(__name__)
 
 PACKAGES = (
     "flowrun",
@@ -28,6 +52,66 @@ PACKAGES = (
     "stable-baselines3",
     "torch",
 )
+
+STATUS_FILE = "status.json"
+RUNNING, COMPLETE, INTERRUPTED, FAILED, CUT = "running", "complete", "interrupted", "failed", "cut"
+#: Files every run folder has from the start: a failed run with nothing else is removed.
+BOOKKEEPING = frozenset(
+    {"config.yaml", "command.txt", "versions.json", STATUS_FILE, "metrics.json"}
+)
+#: Scratch folders (SUMO's generated network files) that are not results either.
+SCRATCH = frozenset({"sumo"})
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C or SIGTERM, stopping a run: a ``KeyboardInterrupt`` that knows its signal.
+
+    Args:
+        signum: the signal received (``SIGINT`` for a plain Ctrl-C).
+    """
+
+    def __init__(self, signum: int = signal.SIGINT) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = int(signum)
+
+    @property
+    def exit_code(self) -> int:
+        """The shell's code for death by this signal: 130 for SIGINT, 143 for SIGTERM."""
+        return 128 + self.signum
+
+
+def exit_code_of(err: BaseException) -> int:
+    """Exit code for an interruption: 128 + signal (130 when the signal is unknown)."""
+    return err.exit_code if isinstance(err, Interrupted) else 128 + signal.SIGINT
+
+
+@dataclass(frozen=True)
+class RunStatus:
+    """What ``status.json`` says, checked against the processes alive now.
+
+    Attributes:
+        state: ``running``, ``complete``, ``interrupted``, ``failed``, ``cut`` (said running,
+            but its process is gone) or ``unknown`` (no readable ``status.json``).
+        pid: process that ran it.
+        host: machine that ran it.
+        started: UTC start time (ISO 8601).
+        ended: UTC end time, when it ended.
+        error: the one-line error of a failed run.
+        exit_code: the command's exit code (130/143 when interrupted), when it ended.
+    """
+
+    state: str
+    pid: int | None = None
+    host: str | None = None
+    started: str | None = None
+    ended: str | None = None
+    error: str | None = None
+    exit_code: int | None = None
+
+    @property
+    def finished(self) -> bool:
+        """Whether the run completed (its results are whole)."""
+        return self.state == COMPLETE
 
 
 def versions() -> dict[str, str]:
@@ -42,34 +126,276 @@ def versions() -> dict[str, str]:
 
 
 def unique_dir(base: Path) -> Path:
-    """Create ``base`` (or ``base-1``, ``base-2``, ... if taken) and return it: never reuse one."""
+    """Create ``base`` (or ``base-1``, ``base-2``, ... if taken) and return it: never reuse one.
+
+    Safe against other processes creating the same name at the same moment (``mkdir`` is
+    atomic).
+
+    Raises:
+        FlowrunError: the folder cannot be created (a file in the way, read-only, disk full).
+    """
     path, n = base, 1
     while True:
         try:
             path.mkdir(parents=True, exist_ok=False)
             return path
         except FileExistsError:
+            if not path.is_dir():
+                raise FlowrunError(f"cannot create folder {path}: a file is in the way") from None
             path = base.with_name(f"{base.name}-{n}")
             n += 1
         except OSError as err:
-            raise FlowrunError(f"cannot create folder {path}: {err}") from err
+            raise FlowrunError(f"cannot create folder {path}: {describe_os_error(err)}") from None
+
+
+def check_out_dir(out: Path) -> None:
+    """Refuse an ``--out`` that is a file or a read-only folder, before anything starts.
+
+    Raises:
+        FlowrunError: naming ``out`` and what is wrong with it.
+    """
+    probe = out
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if probe.exists() and not probe.is_dir():
+        raise FlowrunError(f"--out {out}: {probe} is a file, not a folder; pass a folder")
+    if probe.is_dir() and not os.access(probe, os.W_OK | os.X_OK):
+        raise FlowrunError(f"--out {out}: cannot write in {probe} (read-only or not yours)")
+
+
+def run_dir_name(seed: int) -> str:
+    """``<timestamp>-<seed>`` (UTC, to the second)."""
+    return f"{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}-{seed}"
+
+
+def _safe_name(name: str) -> str:
+    bad = not name or name in {".", ".."} or any(c in name for c in "/\\\0")
+    if bad or Path(name).is_absolute():
+        raise ConfigError(
+            f"names the run folder, so it must be a plain folder name (no '/', '\\', '..'), "
+            f"got {name!r}",
+            path="name",
+        )
+    return name
 
 
 def create_run_dir(
     out: Path, cfg: ExperimentConfig, seed: int, argv: list[str] | None = None
 ) -> Path:
-    """Make a fresh run folder and write the resolved config, command line and versions."""
-    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
-    run_dir = unique_dir(out / cfg.name / f"{stamp}-{seed}")
-    (run_dir / "config.yaml").write_text(dump_config(cfg))
-    command = argv if argv is not None else sys.argv
-    (run_dir / "command.txt").write_text(shlex.join(command) + "\n")
-    write_json(run_dir / "versions.json", versions())
+    """Make a fresh run folder and write the resolved config, command line and versions.
+
+    Raises:
+        ConfigError: ``cfg.name`` is not a plain folder name.
+        FlowrunError: the folder cannot be created or written.
+    """
+    run_dir = unique_dir(out / _safe_name(cfg.name) / run_dir_name(seed))
+    try:
+        (run_dir / "config.yaml").write_text(dump_config(cfg))
+        command = argv if argv is not None else sys.argv
+        (run_dir / "command.txt").write_text(shlex.join(command) + "\n")
+        write_json(run_dir / "versions.json", versions())
+    except OSError as err:
+        shutil.rmtree(run_dir, ignore_errors=True)
+        raise FlowrunError(f"cannot write run folder {run_dir}: {describe_os_error(err)}") from None
     return run_dir
 
 
+def start_run(
+    out: Path, cfg: ExperimentConfig, seed: int, argv: list[str] | None = None
+) -> Path:
+    """:func:`create_run_dir`, then mark it ``running`` (with this process's pid and host)."""
+    run_dir = create_run_dir(out, cfg, seed, argv)
+    try:
+        mark_running(run_dir)
+    except OSError as err:
+        shutil.rmtree(run_dir, ignore_errors=True)
+        raise FlowrunError(f"cannot write run folder {run_dir}: {describe_os_error(err)}") from None
+    return run_dir
+
+
+def _now() -> str:
+    return datetime.now(UTC).isoformat(timespec="seconds")
+
+
+def _process_start(pid: int) -> str | None:
+    """The kernel's start time of ``pid`` (Linux ``/proc``): tells a reused pid apart."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    return stat.rsplit(")", 1)[-1].split()[19]  # field 22, counted after "pid (comm)"
+
+
+def mark_running(run_dir: Path) -> None:
+    """Write ``status.json``: ``running``, this process's pid, host and start time."""
+    pid = os.getpid()
+    write_json(
+        run_dir / STATUS_FILE,
+        {
+            "status": RUNNING,
+            "pid": pid,
+            "pid_start": _process_start(pid),
+            "host": socket.gethostname(),
+            "started": _now(),
+        },
+    )
+
+
+def mark_done(
+    run_dir: Path, state: str, *, error: str | None = None, exit_code: int | None = None
+) -> None:
+    """Replace ``running`` by how the run ended (``complete``, ``interrupted``, ``failed``)."""
+    path = run_dir / STATUS_FILE
+    data: dict[str, Any] = {}
+    with suppress(OSError, ValueError):
+        data = dict(json.loads(path.read_text()))
+    data.update({"status": state, "ended": _now()})
+    if error is not None:
+        data["error"] = error
+    if exit_code is not None:
+        data["exit_code"] = exit_code
+    write_json(path, data)
+
+
+def _alive(pid: int, start: str | None) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # someone else's process: it exists
+    now = _process_start(pid)
+    return start is None or now is None or now == start
+
+
+def read_status(run_dir: Path) -> RunStatus:
+    """How the run in ``run_dir`` ended, or ``cut`` if it says running but its process died."""
+    try:
+        data = json.loads((run_dir / STATUS_FILE).read_text())
+        state = str(data["status"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return RunStatus("unknown")
+    pid = data.get("pid")
+    host = data.get("host")
+    here = isinstance(pid, int) and host == socket.gethostname()
+    if state == RUNNING and here and not _alive(int(pid), data.get("pid_start")):
+        state = CUT
+    return RunStatus(
+        state,
+        pid=pid if isinstance(pid, int) else None,
+        host=host,
+        started=data.get("started"),
+        ended=data.get("ended"),
+        error=data.get("error"),
+        exit_code=data.get("exit_code"),
+    )
+
+
+def is_complete(run_dir: Path) -> bool:
+    """Whether ``run_dir`` holds a run that completed (not running, cut, interrupted, failed)."""
+    return read_status(run_dir).finished
+
+
+def describe_os_error(err: OSError) -> str:
+    """One line for a file-system error, naming the likely cause."""
+    hints = {
+        errno.ENOSPC: "disk full",
+        errno.EDQUOT: "disk quota exceeded",
+        errno.EFBIG: "file too large (file size limit reached)",
+        errno.EROFS: "read-only file system",
+        errno.EACCES: "permission denied",
+        errno.EPERM: "permission denied",
+        errno.ENOTDIR: "a file is in the way of a folder",
+    }
+    what = hints.get(err.errno or 0, err.strerror or str(err))
+    where = f" ({err.filename})" if err.filename else ""
+    return f"{what}{where}"
+
+
+def _has_results(run_dir: Path) -> bool:
+    try:
+        return any(p.name not in BOOKKEEPING | SCRATCH for p in run_dir.iterdir())
+    except OSError:
+        return True  # cannot tell: keep it
+
+
+@contextmanager
+def tracked_run(run_dir: Path, *, remove_if_empty: bool = True) -> Iterator[Path]:
+    """Label ``run_dir`` with how the code in the ``with`` block ended.
+
+    - normal end: ``complete``;
+    - ``KeyboardInterrupt`` (Ctrl-C; SIGTERM raised as :class:`Interrupted`): ``interrupted``
+      with exit code 130/143, then re-raised;
+    - a :class:`FlowrunError`: ``failed`` with its message, re-raised; if nothing but the
+      bookkeeping files was written (e.g. SUMO refused the network), the folder is removed;
+    - an ``OSError`` (disk full, file size limit, read-only): ``failed`` (if that can still be
+      written), raised as one :class:`FlowrunError` line without the chain of errors behind it;
+    - anything else (a bug): ``failed`` with the error, re-raised as it is.
+
+    Args:
+        run_dir: the folder (from :func:`start_run`).
+        remove_if_empty: remove a failed run's folder when it holds no results.
+
+    Yields:
+        ``run_dir``.
+    """
+    try:
+        yield run_dir
+    except KeyboardInterrupt as err:
+        with suppress(OSError):
+            mark_done(run_dir, INTERRUPTED, exit_code=exit_code_of(err))
+        raise
+    except OSError as err:
+        message = f"cannot write run folder {run_dir}: {describe_os_error(err)}"
+        _fail(run_dir, message, remove_if_empty)
+        raise FlowrunError(message) from None
+    except FlowrunError as err:
+        _fail(run_dir, str(err), remove_if_empty)
+        raise
+    except Exception as err:
+        _fail(run_dir, f"{type(err).__name__}: {err}", remove_if_empty=False)
+        raise
+    mark_done(run_dir, COMPLETE, exit_code=0)
+
+
+def _fail(run_dir: Path, message: str, remove_if_empty: bool) -> None:
+    if remove_if_empty and not _has_results(run_dir):
+        shutil.rmtree(run_dir, ignore_errors=True)
+        return
+    try:
+        mark_done(run_dir, FAILED, error=message.splitlines()[0] if message else "", exit_code=1)
+    except OSError as err:
+        log.warning("could not mark %s failed: %s", run_dir, describe_os_error(err))
+
+
+def json_safe(data: Any) -> Any:
+    """``data`` with every NaN and infinity replaced by ``None`` (JSON has neither)."""
+    if isinstance(data, float):
+        return data if math.isfinite(data) else None
+    if isinstance(data, dict):
+        return {k: json_safe(v) for k, v in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [json_safe(v) for v in data]
+    return data
+
+
 def write_json(path: Path, data: Any) -> None:
-    """Write JSON atomically (a reader never sees half a file)."""
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2, sort_keys=True, default=str) + "\n")
-    tmp.replace(path)
+    """Write strict JSON atomically (a reader never sees half a file; NaN/inf become null).
+
+    Raises:
+        OSError: the file cannot be written (the temporary file is removed).
+    """
+    text = json.dumps(json_safe(data), indent=2, sort_keys=True, default=str, allow_nan=False)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with tmp.open("w") as f:
+            f.write(text + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+        tmp.replace(path)
+    except BaseException:
+        with suppress(OSError):
+            tmp.unlink()
+        raise
