@@ -21,6 +21,7 @@ __all__ = [
     "MultiAgentMergePOEnv",
     "MultiAgentWaveAttenuationPOEnv",
     "MultiEnv",
+    "MultiTrafficLightGridPOEnv",
 ]
 
 _LAZY = {name: path for name, path in MULTIAGENT_ENVS.items()} | {

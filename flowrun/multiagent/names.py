@@ -12,6 +12,7 @@ MULTIAGENT_ENVS: dict[str, str] = {
     "MultiAgentAccelPOEnv": "flowrun.multiagent.ring:MultiAgentAccelPOEnv",
     "MultiAgentMergePOEnv": "flowrun.multiagent.merge:MultiAgentMergePOEnv",
     "MultiAgentHighwayPOEnv": "flowrun.multiagent.highway:MultiAgentHighwayPOEnv",
+    "MultiTrafficLightGridPOEnv": "flowrun.multiagent.grid:MultiTrafficLightGridPOEnv",
 }
 
 #: The command that installs what the multi-agent environments need.
