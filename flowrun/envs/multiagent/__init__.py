@@ -16,6 +16,7 @@ __all__ = [
     "MultiAgentMergePOEnv",
     "MultiAgentWaveAttenuationPOEnv",
     "MultiEnv",
+    "MultiTrafficLightGridPOEnv",
 ]
 
 
