@@ -17,6 +17,7 @@ from flowrun.suggest import did_you_mean, unknown_name
 
 
 def _builtin() -> dict[str, type]:
+    from flowrun.envs.bottleneck import BottleneckEnv
     from flowrun.envs.merge import MergePOEnv
     from flowrun.envs.ring.accel import AccelEnv
     from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
@@ -36,12 +37,18 @@ def _builtin() -> dict[str, type]:
             WaveAttenuationPOEnv,
             LaneChangeAccelEnv,
             MergePOEnv,
+            BottleneckEnv,
             TestEnv,
             TrafficLightGridEnv,
             TrafficLightGridPOEnv,
             TrafficLightGridBenchmarkEnv,
         )
     }
+
+
+#: envs that only make sense on their own network, with a config naming it (no default
+#: experiment to register with Gymnasium): the bottleneck's and the open highway's
+NEEDS_CONFIG = frozenset({"BottleneckEnv"})
 
 
 def env_names() -> list[str]:
@@ -183,6 +190,8 @@ def register_envs() -> None:
     from flowrun.envs.defaults import DEFAULT_CONFIGS
 
     for name in sorted(_builtin()):  # the multi-agent envs are PettingZoo envs, not Gymnasium's
+        if name in NEEDS_CONFIG:
+            continue
         env_id = f"flowrun/{name}-v0"
         if env_id in gymnasium.registry:
             continue

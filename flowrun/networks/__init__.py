@@ -1,6 +1,7 @@
 """Networks described as data and converted to SUMO networks."""
 
 from flowrun.networks.base import Network, NetworkSpec, StartPositions
+from flowrun.networks.bottleneck import BottleneckNetwork
 from flowrun.networks.figure_eight import FigureEightNetwork
 from flowrun.networks.highway import HighwayNetwork
 from flowrun.networks.merge import MergeNetwork
@@ -9,6 +10,7 @@ from flowrun.networks.template import TemplateNetwork
 
 __all__ = [
     "ADDITIONAL_NET_PARAMS",
+    "BottleneckNetwork",
     "FigureEightNetwork",
     "HighwayNetwork",
     "MergeNetwork",

@@ -7,6 +7,7 @@ from typing import Any
 from flowrun.config.params import InitialConfig, VehicleParams
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
+from flowrun.networks.bottleneck import BottleneckNetwork
 from flowrun.networks.figure_eight import FigureEightNetwork
 from flowrun.networks.highway import HighwayNetwork
 from flowrun.networks.merge import MergeNetwork
@@ -22,6 +23,7 @@ NETWORKS: dict[str, type[Network]] = {
     "highway": HighwayNetwork,
     "template": TemplateNetwork,
     "traffic_light_grid": TrafficLightGridNetwork,
+    "bottleneck": BottleneckNetwork,
 }
 _ALIASES = {
     "loop": "ring",
@@ -41,6 +43,8 @@ _ALIASES = {
     "TrafficLightGridNetwork": "traffic_light_grid",
     "TrafficLightGridScenario": "traffic_light_grid",
     "SimpleGridScenario": "traffic_light_grid",
+    "BottleneckNetwork": "bottleneck",
+    "BottleneckScenario": "bottleneck",
 }
 
 

@@ -1,8 +1,9 @@
 """Flow's old names for networks (``flow.scenarios``): ``LoopScenario`` is the ring,
 ``Figure8Scenario``/``FigureEightScenario`` the figure eight, ``MergeScenario`` the merge and
-``HighwayScenario`` the highway."""
+``HighwayScenario`` the highway, ``BottleneckScenario`` the bottleneck."""
 
 from flowrun.networks.base import Network
+from flowrun.networks.bottleneck import BottleneckScenario
 from flowrun.networks.figure_eight import Figure8Scenario, FigureEightScenario
 from flowrun.networks.highway import HighwayScenario
 from flowrun.networks.merge import MergeScenario
@@ -12,6 +13,7 @@ from flowrun.networks.ring import LoopScenario
 Scenario = Network
 
 __all__ = [
+    "BottleneckScenario",
     "Figure8Scenario",
     "FigureEightScenario",
     "HighwayScenario",
