@@ -164,7 +164,7 @@ def test_sigterm_finishes_the_log_and_marks_metrics_interrupted(tmp_path: Path) 
         if proc.poll() is None:
             os.kill(proc.pid, signal.SIGKILL)
             proc.wait()
-    assert proc.returncode == 130, (out, err)
+    assert proc.returncode == 143, (out, err)  # 128 + SIGTERM
     assert "Traceback" not in err
     (folder,) = tmp_path.glob("*/*")
     m = metrics(folder)

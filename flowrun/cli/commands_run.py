@@ -2,11 +2,7 @@
 
 from __future__ import annotations
 
-import signal
 import sys
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
-from pathlib import Path
 from typing import Annotated, Any
 
 import typer
@@ -14,78 +10,38 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from flowrun.cli.common import guarded
+from flowrun.cli.common import (
+    DEFAULT_OUT,
+    AnyConfigArg,
+    ConfigArg,
+    OutOpt,
+    SeedOpt,
+    SetOpt,
+    guarded,
+    interrupt_between_steps,
+    interrupted_exit,
+    overrides_with_seed,
+    sigterm_as_interrupt,
+)
+
+__all__ = [  # the shared options, re-exported for the commands that import them from here
+    "AnyConfigArg",
+    "ConfigArg",
+    "OutOpt",
+    "SeedOpt",
+    "SetOpt",
+    "baseline",
+    "console",
+    "interrupt_between_steps",
+    "overrides_with_seed",
+    "register",
+    "sigterm_as_interrupt",
+]
 
 console = Console()
 
-ConfigArg = Annotated[Path, typer.Argument(help="Experiment YAML file.", show_default=False)]
-AnyConfigArg = Annotated[
-    Path,
-    typer.Argument(
-        help="Experiment YAML file, or a Flow config module (.py defining flow_params).",
-        show_default=False,
-    ),
-]
-SetOpt = Annotated[
-    list[str] | None,
-    typer.Option("--set", help="Override a config value: a.b=value (YAML scalar). Repeatable."),
-]
-SeedOpt = Annotated[int | None, typer.Option("--seed", help="Seed (overrides sim.seed).")]
-OutOpt = Annotated[Path, typer.Option("--out", help="Folder for run folders.")]
-
-
 #: Steps between progress-bar updates.
 PROGRESS_EVERY = 100
-
-
-def overrides_with_seed(sets: list[str] | None, seed: int | None) -> list[str]:
-    """``--set`` values plus ``--seed`` as the override ``sim.seed=S``."""
-    items = list(sets or [])
-    if seed is not None:
-        items.append(f"sim.seed={seed}")
-    return items
-
-
-@contextmanager
-def sigterm_as_interrupt() -> Iterator[None]:
-    """Treat SIGTERM like Ctrl-C so ``finally`` blocks finish the logs."""
-
-    def handler(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGTERM, handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
-@contextmanager
-def interrupt_between_steps() -> Iterator[Callable[[], None]]:
-    """Ctrl-C/SIGTERM stop the run at the next step boundary (a second signal stops at once).
-
-    Yields a ``check()`` to call between steps: it raises ``KeyboardInterrupt`` once a signal
-    came. Raising from inside the signal handler could land in the middle of writing the log
-    (the mcap writer compressing a chunk) and silently drop that chunk's steps.
-    """
-    requested = False
-
-    def handler(signum: int, frame: Any) -> None:
-        nonlocal requested
-        if requested:
-            raise KeyboardInterrupt
-        requested = True
-
-    def check() -> None:
-        if requested:
-            raise KeyboardInterrupt
-
-    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        yield check
-    finally:
-        for s, h in previous.items():
-            signal.signal(s, h)
 
 
 def metrics_table(title: str, rows: list[Any]) -> Table:
@@ -138,7 +94,7 @@ def baseline(
     ] = None,
     seed: SeedOpt = None,
     set_: SetOpt = None,
-    out: OutOpt = Path("runs"),
+    out: OutOpt = DEFAULT_OUT,
     no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
     record_every: Annotated[int, typer.Option("--record-every", help="Log every N-th step.")] = 1,
     render: Annotated[
@@ -186,9 +142,10 @@ def baseline(
                     argv=sys.argv,
                     progress=progress,
                 )
-            except KeyboardInterrupt:
-                console.print("[yellow]interrupted[/]: logs finished; metrics.json says so")
-                raise typer.Exit(code=130) from None
+            except KeyboardInterrupt as err:
+                raise interrupted_exit(
+                    err, "logs finished; status.json and metrics.json say so"
+                ) from None
     console.print(metrics_table(f"{cfg.name}: {runs} run(s) x {total} steps", result.metrics))
     if result.signals:
         how = result.signal_controller or "the network's programs / the env's actions"

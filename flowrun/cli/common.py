@@ -1,17 +1,67 @@
-"""Helpers shared by the CLI commands: error reporting and ``--set`` parsing."""
+"""What the CLI commands share: error reporting, the common options, interruptions.
+
+The options every command that runs something takes, defined once so they mean the same
+everywhere::
+
+    def cmd(config: ConfigArg, set_: SetOpt = None, seed: SeedOpt = None,
+            out: OutOpt = DEFAULT_OUT) -> None:
+        cfg = load_config(config, overrides_with_seed(set_, seed))
+
+- ``--set a.b=value``: override a config value (YAML scalar, never ``eval``); repeatable;
+- ``--seed N``: the experiment's seed (``sim.seed``), applied after every ``--set``;
+- ``--out DIR``: the folder that receives run folders (default ``runs``).
+
+Interruptions: inside :func:`interrupt_between_steps` (or :func:`sigterm_as_interrupt`),
+Ctrl-C and SIGTERM raise :class:`~flowrun.experiment.rundir.Interrupted`, a
+``KeyboardInterrupt`` that carries the signal; :func:`interrupted_exit` turns it into
+exit code 130 (SIGINT) or 143 (SIGTERM).
+"""
 
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable
-from typing import ParamSpec, TypeVar
+import signal
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Any, ParamSpec, TypeVar
 
 import typer
 
 from flowrun.errors import FlowrunError
+from flowrun.experiment.rundir import Interrupted, exit_code_of
 
 P = ParamSpec("P")
 R = TypeVar("R")
+
+#: Where run folders go unless ``--out`` says otherwise.
+DEFAULT_OUT = Path("runs")
+
+SetOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--set",
+        help="Override a config value: a.b=value (read as a YAML scalar). Repeatable.",
+    ),
+]
+SeedOpt = Annotated[
+    int | None, typer.Option("--seed", help="Seed (overrides sim.seed and any --set of it).")
+]
+OutOpt = Annotated[
+    Path, typer.Option("--out", help="Folder that receives the run folders.")
+]
+ConfigArg = Annotated[Path, typer.Argument(help="Experiment YAML file.", show_default=False)]
+AnyConfigArg = Annotated[
+    Path,
+    typer.Argument(
+        help="Experiment YAML file, or a Flow config module (.py defining flow_params).",
+        show_default=False,
+    ),
+]
+
+#: The long names of the options above: ``--help`` of every command that runs something
+#: lists them (tests/test_runs_options.py checks).
+COMMON_OPTIONS = ("--out", "--seed", "--set")
 
 
 def guarded(fn: Callable[P, R]) -> Callable[P, R]:
@@ -26,3 +76,62 @@ def guarded(fn: Callable[P, R]) -> Callable[P, R]:
             raise typer.Exit(code=1) from None
 
     return wrapper
+
+
+def overrides_with_seed(sets: list[str] | None, seed: int | None) -> list[str]:
+    """``--set`` values plus ``--seed`` as the override ``sim.seed=S`` (last, so it wins)."""
+    items = list(sets or [])
+    if seed is not None:
+        items.append(f"sim.seed={seed}")
+    return items
+
+
+@contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """Raise SIGTERM as :class:`Interrupted` (like Ctrl-C) so ``finally`` blocks run.
+
+    Ctrl-C raises :class:`Interrupted` too, so the exit code can tell the two apart.
+    """
+
+    def handler(signum: int, frame: Any) -> None:
+        raise Interrupted(signum)
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+@contextmanager
+def interrupt_between_steps() -> Iterator[Callable[[], None]]:
+    """Ctrl-C/SIGTERM stop the run at the next step boundary (a second signal stops at once).
+
+    Yields a ``check()`` to call between steps: it raises :class:`Interrupted` once a signal
+    came. Raising from inside the signal handler could land in the middle of writing the log
+    (the mcap writer compressing a chunk) and silently drop that chunk's steps.
+    """
+    received: list[int] = []
+
+    def handler(signum: int, frame: Any) -> None:
+        if received:
+            raise Interrupted(received[0])
+        received.append(signum)
+
+    def check() -> None:
+        if received:
+            raise Interrupted(received[0])
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield check
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+def interrupted_exit(err: KeyboardInterrupt, message: str) -> typer.Exit:
+    """Print ``interrupted: message`` and return the exit to raise (130 SIGINT, 143 SIGTERM)."""
+    typer.secho(f"interrupted: {message}", err=True, fg=typer.colors.YELLOW)
+    return typer.Exit(code=exit_code_of(err))

@@ -16,7 +16,17 @@ from flowrun.envs.factory import env_class, make_env
 from flowrun.envs.frames import network_metadata
 from flowrun.errors import ConfigError
 from flowrun.experiment.metrics import RunMetrics
-from flowrun.experiment.rundir import create_run_dir, versions, write_json
+from flowrun.experiment.rundir import (
+    COMPLETE,
+    FAILED,
+    INTERRUPTED,
+    RUNNING,
+    check_out_dir,
+    start_run,
+    tracked_run,
+    versions,
+    write_json,
+)
 from flowrun.experiment.runner import Experiment, FrameSink
 from flowrun.experiment.signal_baselines import SignalMetrics, SignalRun
 from flowrun.recording.writer import McapRecorder
@@ -24,6 +34,8 @@ from flowrun.recording.writer import McapRecorder
 log = logging.getLogger(__name__)
 
 GIF_EVERY = 10  # simulation steps between two GIF frames
+#: Outflow is counted over the last this many seconds of a run (Flow's ``outflows``), s.
+OUTFLOW_WINDOW = 500
 
 
 @dataclass
@@ -50,18 +62,24 @@ class BaselineResult:
 
 
 def resolve_steps(cfg: ExperimentConfig, steps: int | None) -> int:
-    """Steps per run: ``--steps`` or the config's horizon."""
+    """Steps per run: ``--steps`` or the config's horizon (a whole number of steps, >= 1)."""
     if steps is not None:
         if steps < 1:
             raise ConfigError(f"--steps must be >= 1, got {steps}")
         return steps
-    if math.isinf(cfg.env.horizon):
+    horizon = cfg.env.horizon
+    if math.isinf(horizon):
         raise ConfigError(
             "env.horizon is infinite, so a run would never end; set env.horizon in the "
             "config or pass --steps N",
             path="env.horizon",
         )
-    return int(cfg.env.horizon)
+    if math.isnan(horizon) or horizon < 1 or horizon != int(horizon):
+        raise ConfigError(
+            f"env.horizon is the number of steps of a run: a whole number >= 1, got {horizon!r}",
+            path="env.horizon",
+        )
+    return int(horizon)
 
 
 def log_metadata(
@@ -125,8 +143,16 @@ def run_baseline(
     """Run the config's environment ``runs`` times and write the run folder.
 
     The seed is ``cfg.sim.seed`` (0 when unset); run ``i`` resets with seed ``seed + i``.
-    Interrupted by Ctrl-C/SIGTERM, the current log is finished, ``metrics.json`` says
+    The folder's ``status.json`` says ``running`` from the start and how the run ended at
+    the end (see :mod:`flowrun.experiment.rundir`); ``metrics.json`` is rewritten after
+    every run, so even a killed run leaves the runs it finished. Interrupted by
+    Ctrl-C/SIGTERM, the current log is finished, ``metrics.json`` and ``status.json`` say
     ``interrupted``, and the ``KeyboardInterrupt`` propagates.
+
+    Raises:
+        ConfigError: bad ``runs``/``steps``/``record_every``, or a config that cannot run.
+        FlowrunError: the run folder cannot be created or written (disk full, read-only), or
+            the simulation failed; a folder holding nothing but bookkeeping is removed.
     """
     if runs < 1:
         raise ConfigError(f"--runs must be >= 1, got {runs}")
@@ -137,12 +163,25 @@ def run_baseline(
     # ``--steps`` is the episode length: the horizon follows it (and the saved config says so).
     cfg = replace(cfg, sim=replace(cfg.sim, seed=seed), env=replace(cfg.env, horizon=n_steps))
     env_class(cfg)  # a wrong env class or missing additional_params: fail before any file
-    run_dir = create_run_dir(out, cfg, seed, argv)
-    try:
-        env = make_env(cfg, render_mode="rgb_array" if render else None, work_dir=run_dir / "sumo")
-    except BaseException as err:  # e.g. a user env's __init__: say so in the run folder
-        write_json(run_dir / "metrics.json", {"status": "failed", "error": str(err)})
-        raise
+    check_out_dir(out)
+    run_dir = start_run(out, cfg, seed, argv)
+    with tracked_run(run_dir):
+        return _run(cfg, run_dir, runs, n_steps, seed, record, record_every, render, progress)
+    raise AssertionError("unreachable")  # pragma: no cover - tracked_run re-raises
+
+
+def _run(
+    cfg: ExperimentConfig,
+    run_dir: Path,
+    runs: int,
+    n_steps: int,
+    seed: int,
+    record: bool,
+    record_every: int,
+    render: bool,
+    progress: Callable[[int, int], None] | None,
+) -> BaselineResult:
+    env = make_env(cfg, render_mode="rgb_array" if render else None, work_dir=run_dir / "sumo")
     logs: list[Path] = []
     gif_frames: list[Any] = []
 
@@ -159,36 +198,84 @@ def run_baseline(
 
     has_lights = any(n.type == "traffic_light" for n in env.network.spec.nodes)
     signals = SignalRun(cfg.traffic_lights) if has_lights else None
+    hooks = _Bookkeeping(signals)
     experiment = Experiment(
-        env, sink_factory=sink if record else None, progress=on_step, hooks=signals
+        env, sink_factory=sink if record else None, progress=on_step, hooks=hooks
     )
-    status = "interrupted"
-    try:
-        experiment.run(runs, n_steps, seed=seed)
-        status = "complete"
-    finally:
-        env.close()
-        metrics = experiment.metrics
-        signal_runs = signals.results if signals is not None else []
-        runs_data = [m.to_dict() for m in metrics]
-        for row, signal in zip(runs_data, signal_runs, strict=False):
+
+    def summary(status: str) -> dict[str, Any]:
+        rows = [m.to_dict() for m in experiment.metrics]
+        for row, outflow in zip(rows, hooks.outflows, strict=False):
+            row["outflow"] = outflow
+        for row, signal in zip(rows, signals.results if signals else [], strict=False):
             row.update(signal.to_dict())
-        summary = {
+        data: dict[str, Any] = {
             "status": status,
+            "partial": status != COMPLETE,
             "config": cfg.name,
             "seed": seed,
+            "runs_planned": runs,
             "steps_per_run": n_steps,
-            "runs": runs_data,
+            "runs": rows,
             "logs": [p.name for p in logs],
         }
         if signals is not None:
-            summary["signal_controller"] = cfg.traffic_lights.controller
-        write_json(run_dir / "metrics.json", summary)
-        if gif_frames:
-            write_gif(run_dir / "render.gif", gif_frames)
+            data["signal_controller"] = cfg.traffic_lights.controller
+        return data
+
+    hooks.save = lambda: write_json(run_dir / "metrics.json", summary(RUNNING))
+    write_json(run_dir / "metrics.json", summary(RUNNING))
+    try:
+        experiment.run(runs, n_steps, seed=seed)
+    except BaseException as err:
+        env.close()
+        status = INTERRUPTED if isinstance(err, KeyboardInterrupt) else FAILED
+        try:
+            write_json(run_dir / "metrics.json", summary(status))
+        except OSError as again:  # the disk is full: tracked_run reports the first error
+            log.warning("metrics.json not written: %s", again)
+        raise
+    env.close()
+    write_json(run_dir / "metrics.json", summary(COMPLETE))
+    if gif_frames:
+        write_gif(run_dir / "render.gif", gif_frames)
+    signal_runs = signals.results if signals is not None else []
     return BaselineResult(
-        run_dir, metrics, logs, status, signal_runs, cfg.traffic_lights.controller
+        run_dir, experiment.metrics, logs, COMPLETE, signal_runs, cfg.traffic_lights.controller
     )
+
+
+class _Bookkeeping:
+    """Hooks around every run: the signal controller (if any), each run's outflow, and
+    ``metrics.json`` saved after every run (a killed run keeps the runs it finished)."""
+
+    def __init__(self, signals: SignalRun | None) -> None:
+        self.signals = signals
+        self.outflows: list[float] = []
+        self.save: Callable[[], None] | None = None
+
+    def on_reset(self, env: Env) -> None:
+        if self.signals is not None:
+            self.signals.on_reset(env)
+
+    def before_step(self, env: Env) -> None:
+        if self.signals is not None:
+            self.signals.before_step(env)
+
+    def after_step(self, env: Env) -> None:
+        if self.signals is not None:
+            self.signals.after_step(env)
+
+    def on_run_end(self, env: Env, run: int) -> None:
+        if self.signals is not None:
+            self.signals.on_run_end(env, run)
+        rate = getattr(env.k.vehicle, "get_outflow_rate", None)
+        self.outflows.append(float(rate(OUTFLOW_WINDOW)) if rate is not None else 0.0)
+        if self.save is not None:
+            try:
+                self.save()
+            except OSError as err:  # reported by the final write, or by what interrupted us
+                log.warning("metrics.json not updated: %s", err)
 
 
 def write_gif(path: Path, frames: list[Any]) -> None:
