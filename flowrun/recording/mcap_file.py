@@ -84,6 +84,20 @@ def _time_range(entries: bytearray) -> tuple[int, int]:
     return int(times.min()), int(times.max())
 
 
+CRC_KEY = "flowrun_crc32"
+"""Metadata entry holding :func:`metadata_crc` of its record (8 hex digits), written last."""
+
+
+def metadata_crc(name: str, entries: Mapping[str, str]) -> int:
+    """CRC-32 of a metadata record's name and entries (without :data:`CRC_KEY`), in order:
+    the UTF-8 of name, then of each key and value, each followed by a NUL byte."""
+    crc = zlib.crc32(name.encode("utf-8") + b"\0")
+    for key, value in entries.items():
+        if key != CRC_KEY:
+            crc = zlib.crc32(key.encode("utf-8") + b"\0" + value.encode("utf-8") + b"\0", crc)
+    return crc
+
+
 def record(opcode: int, content: bytes) -> bytes:
     """One MCAP record: opcode, uint64 content length, content."""
     return _RECORD.pack(opcode, len(content)) + content
@@ -246,9 +260,22 @@ class McapWriter:
         content += _pack("<QQ", len(data), len(records))
         self._chunk_indexes.append(record(OP_CHUNK_INDEX, content))
 
-    def add_metadata(self, name: str, metadata: Mapping[str, str]) -> None:
-        """Write a Metadata record (string keys and values)."""
-        rec = record(OP_METADATA, _string(name) + _string_map(metadata))
+    def add_metadata(
+        self, name: str, metadata: Mapping[str, str], *, checksum: bool = False
+    ) -> None:
+        """Write a Metadata record (string keys and values).
+
+        Args:
+            name: the record's name.
+            metadata: its entries.
+            checksum: add a :data:`CRC_KEY` entry (see :func:`metadata_crc`), so a reader
+                can tell a damaged record from an intact one (MCAP metadata has no CRC).
+        """
+        entries = dict(metadata)
+        if checksum:
+            entries.pop(CRC_KEY, None)
+            entries[CRC_KEY] = f"{metadata_crc(name, entries):08x}"
+        rec = record(OP_METADATA, _string(name) + _string_map(entries))
         offset = self._write_record(rec)
         index = _pack("<QQ", offset, len(rec)) + _string(name)
         self._metadata_indexes.append(record(OP_METADATA_INDEX, index))

@@ -1,9 +1,10 @@
-"""Read flowrun MCAP logs back, including logs cut short by a crash.
+"""Read flowrun MCAP logs back, checking every CRC, and salvage damaged or unfinished ones.
 
-An intact log (footer + summary) is read through the mcap library's index: a time range
-only reads the chunks that overlap it. A log without a usable footer is *salvaged*: its
-records are scanned from the start with the library's :class:`~mcap.stream_reader.StreamReader`
-up to the first damaged record, and everything before the damage is readable.
+An intact log (footer + CRC-checked summary) is read through its chunk index: a time range
+only reads the chunks that overlap it. A log without a usable summary is scanned record by
+record (:mod:`flowrun.recording.mcap_read`), skipping damage forward to the next chunk. Each
+chunk's CRC is checked when it is decompressed: a bad chunk is skipped, the others are read,
+and :attr:`McapLog.damage` says what was lost (a warning is logged for each damaged part).
 """
 
 from __future__ import annotations
@@ -11,19 +12,18 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
-from mcap.reader import make_reader
-from mcap.records import Attachment, Channel, Chunk, Footer, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader, breakup_chunk
+from mcap.records import Channel, Message, Schema
 
 from flowrun.errors import RecordingError
-from flowrun.recording import schema
+from flowrun.recording import mcap_read, schema
+from flowrun.recording.damage import DamageReport, Loss
 from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
+from flowrun.recording.mcap_file import OP_CHANNEL, OP_MESSAGE, OP_SCHEMA
 from flowrun.recording.signals import decode_signals
-from flowrun.recording.writer import METADATA_NAME, to_ns
+from flowrun.recording.writer import METADATA_NAME, PROFILE, to_ns
 
 log = logging.getLogger(__name__)
 
@@ -32,31 +32,27 @@ MCAP_MAGIC = b"\x89MCAP0\r\n"
 MessageTriple = tuple[Schema | None, Channel, Message]
 
 
-@dataclass(frozen=True)
-class _ChunkRef:
-    offset: int
-    start_ns: int
-    end_ns: int
-
-
-@dataclass
-class _Scan:
-    """What a linear scan of a log without a usable summary found."""
-
-    chunks: list[_ChunkRef] = field(default_factory=list)
-    metadata: dict[str, dict[str, str]] = field(default_factory=dict)
-    attachments: dict[str, bytes] = field(default_factory=dict)
-    schemas: dict[int, Schema] = field(default_factory=dict)
-    channels: dict[int, Channel] = field(default_factory=dict)
-    good_bytes: int = 0
-    complete: bool = False
-    damage: str = ""
-
-
 def _mib(n: int) -> str:
     if n < 2**20:
         return f"{n / 1024:.1f} KiB"
     return f"{n / 2**20:.1f} MiB"
+
+
+def _default_channels() -> tuple[dict[int, Schema], dict[int, Channel]]:
+    """The schemas/channels :class:`~flowrun.recording.McapRecorder` always registers first
+    (vehicles = 1, stats = 2): used when damage hid a flowrun log's own records."""
+    data = schema.schema_data()
+    schemas = {
+        1: Schema(id=1, name=schema.VEHICLES_TYPE, encoding=schema.ENCODING, data=data),
+        2: Schema(id=2, name=schema.STATS_TYPE, encoding=schema.ENCODING, data=data),
+    }
+    channels = {
+        cid: Channel(
+            id=cid, schema_id=cid, topic=topic, message_encoding=schema.ENCODING, metadata={}
+        )
+        for cid, topic in ((1, schema.VEHICLES_TOPIC), (2, schema.STATS_TOPIC))
+    }
+    return schemas, channels
 
 
 class McapLog:
@@ -65,130 +61,83 @@ class McapLog:
     Attributes:
         path: the file.
         metadata: the ``flowrun`` metadata record (versions, seed, resolved config, ...).
-        all_metadata: every metadata record, by name.
-        attachments: attachment name -> bytes (e.g. ``config.yaml``, ``network.net.xml``).
-        salvaged: whether the file was damaged/unfinished and read only up to the damage.
-        recovered_bytes: bytes of the file that could be used (the whole size when intact).
+        all_metadata: every metadata record, by name (a damaged record is left out and
+            reported in :attr:`damage`).
+        attachments: attachment name -> bytes (e.g. ``config.yaml``, ``network.net.xml``);
+            a damaged attachment is left out and reported.
+        damage: what is damaged or lost; grows while chunks are read (each chunk's CRC is
+            checked when it is first decompressed), complete after a full read.
         file_bytes: size of the file.
     """
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self.file_bytes = path.stat().st_size
-        self.salvaged = False
-        self.recovered_bytes = self.file_bytes
-        self.all_metadata: dict[str, dict[str, str]] = {}
-        self.attachments: dict[str, bytes] = {}
-        self._schemas: dict[int, Schema] = {}
-        self._channels: dict[int, Channel] = {}
-        self._scan: _Scan | None = None
-        self._frame_count: int | None = None
-        self._time_range_ns: tuple[int, int] | None = None
-        if not self._open_indexed():
-            self._open_scanned()
-        self._check_topics()
-
-    # -- opening ---------------------------------------------------------------------------
-    def _open_indexed(self) -> bool:
         try:
-            with open(self.path, "rb") as f:
-                f.seek(-len(MCAP_MAGIC), os.SEEK_END)
-                if f.read() != MCAP_MAGIC:  # cut short: the footer cannot be trusted
-                    return False
-                f.seek(0)
-                reader = make_reader(f)
-                summary = reader.get_summary()
-                if summary is None or not summary.chunk_indexes:
-                    return False
-                self.all_metadata = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
-                self.attachments = {a.name: bytes(a.data) for a in reader.iter_attachments()}
-        except Exception as err:  # no footer, truncated summary, ...: fall back to a scan
-            log.debug("%s: index unusable (%s); scanning", self.path, err)
-            return False
-        self._schemas = dict(summary.schemas)
-        self._channels = dict(summary.channels)
-        stats = summary.statistics
-        if stats is not None:
-            self._time_range_ns = (stats.message_start_time, stats.message_end_time)
-            vehicles = self._channel_id(schema.VEHICLES_TOPIC)
-            if vehicles is not None:
-                self._frame_count = stats.channel_message_counts.get(vehicles, 0)
-        return True
-
-    def _open_scanned(self) -> None:
-        scan = _Scan()
-        with open(self.path, "rb") as f:
-            records = StreamReader(
-                f, emit_chunks=True, record_size_limit=max(self.file_bytes, 1)
-            ).records
-            scan.good_bytes = 0
-            try:
-                for record in records:
-                    end = f.tell()
-                    if isinstance(record, Chunk):
-                        scan.chunks.append(
-                            _ChunkRef(
-                                scan.good_bytes, record.message_start_time, record.message_end_time
-                            )
-                        )
-                    elif isinstance(record, Metadata):
-                        scan.metadata[record.name] = dict(record.metadata)
-                    elif isinstance(record, Attachment):
-                        scan.attachments[record.name] = bytes(record.data)
-                    elif isinstance(record, Schema):
-                        scan.schemas[record.id] = record
-                    elif isinstance(record, Channel):
-                        scan.channels[record.id] = record
-                    elif isinstance(record, Footer):
-                        scan.complete = True
-                    scan.good_bytes = end
-            except Exception as err:  # the damage: stop here, keep what came before
-                scan.damage = f"{type(err).__name__}: {err}" if str(err) else type(err).__name__
-            if scan.good_bytes == 0 and scan.damage:
-                raise RecordingError(
-                    f"{self.path} is not a readable MCAP file ({scan.damage}); expected a "
-                    "log written by flowrun"
-                )
-            # Logs written by the mcap library keep schemas/channels inside the chunks (flowrun
-            # writes them before the first chunk): read them from the first intact chunk(s).
-            for ref in scan.chunks:
-                try:
-                    records_in = self._chunk_records(f, ref)
-                except Exception:
-                    break
-                for rec in records_in:
-                    if isinstance(rec, Schema):
-                        scan.schemas[rec.id] = rec
-                    elif isinstance(rec, Channel):
-                        scan.channels[rec.id] = rec
-                if any(c.topic == schema.VEHICLES_TOPIC for c in scan.channels.values()):
-                    break
-        self._scan = scan
-        self.all_metadata = scan.metadata
-        self.attachments = scan.attachments
-        self._schemas = scan.schemas
-        self._channels = scan.channels
-        if scan.chunks:
-            self._time_range_ns = (
-                min(c.start_ns for c in scan.chunks),
-                max(c.end_ns for c in scan.chunks),
+            with open(path, "rb") as f:
+                st = mcap_read.read_structure(f, self.file_bytes)
+        except OSError as err:
+            raise RecordingError(f"cannot read {path}: {err}") from err
+        self._st = st
+        self.damage: DamageReport = st.damage
+        self.all_metadata = st.metadata
+        self.attachments = st.attachments
+        self._schemas: dict[int, Schema] = dict(st.schemas)
+        self._channels: dict[int, Channel] = dict(st.channels)
+        self._lost_offsets: set[int] = set()
+        if not st.chunks and st.damage and not st.indexed:
+            raise RecordingError(
+                f"{path} holds no readable data ({'; '.join(st.damage.describe())}); "
+                "expected a log written by flowrun"
             )
-        if not scan.complete or scan.damage:
-            self.salvaged = True
-            self.recovered_bytes = scan.good_bytes
+        self._find_channels()
+        self._check_topics()
+        if self.damage:
             span = self.time_range
             upto = f", simulation time {span[0]:.1f}-{span[1]:.1f} s" if span else ""
             log.warning(
-                "%s is damaged or was not closed (%s at byte %d); salvaged %s of %s (%.1f%%) "
-                "in %d chunks%s",
+                "%s is damaged or was not closed; salvaged %s of %s in %d chunks%s: %s",
                 self.path,
-                scan.damage or "no footer",
-                scan.good_bytes,
-                _mib(scan.good_bytes),
+                _mib(self.recovered_bytes),
                 _mib(self.file_bytes),
-                100.0 * scan.good_bytes / max(self.file_bytes, 1),
-                len(scan.chunks),
+                len(st.chunks),
                 upto,
+                "; ".join(self.damage.describe()),
+            )
+
+    def _find_channels(self) -> None:
+        """Logs written by the mcap library keep schemas/channels inside the chunks: read
+        them from the first intact chunk(s); a flowrun log whose own records were damaged
+        gets the recorder's fixed ones."""
+        if self._channel_id(schema.VEHICLES_TOPIC) is not None or not self._st.chunks:
+            return
+        with open(self.path, "rb") as f:
+            for ref in self._st.chunks[:8]:
+                records = self._chunk(f, ref)
+                if records is None:
+                    continue
+                for opcode, start, end in mcap_read.split_records(records):
+                    if opcode == OP_SCHEMA:
+                        sch = mcap_read.parse_schema(records[start:end])
+                        self._schemas.setdefault(sch.id, sch)
+                    elif opcode == OP_CHANNEL:
+                        ch = mcap_read.parse_channel(records[start:end])
+                        self._channels.setdefault(ch.id, ch)
+                if self._channel_id(schema.VEHICLES_TOPIC) is not None:
+                    return
+        if self._st.profile == PROFILE and self.damage and 1 not in self._channels:
+            schemas, channels = _default_channels()
+            for key, sch in schemas.items():
+                self._schemas.setdefault(key, sch)
+            for key, ch in channels.items():
+                self._channels.setdefault(key, ch)
+            self.damage.add(
+                Loss(
+                    "channels",
+                    0,
+                    "the channel records are unreadable; read with flowrun's "
+                    "standard channels (vehicles = 1, stats = 2)",
+                )
             )
 
     def _check_topics(self) -> None:
@@ -196,7 +145,7 @@ class McapLog:
         if channel is None:
             topics = sorted({c.topic for c in self._channels.values()})
             found = ", ".join(topics) if topics else "no topics"
-            damaged = " before the damage" if self.salvaged else ""
+            damaged = " readable (the log is damaged)" if self.damage else ""
             raise RecordingError(
                 f"{self.path} has no {schema.VEHICLES_TOPIC} topic{damaged} (found: {found}); "
                 "expected a log written by flowrun baseline/train/eval"
@@ -211,19 +160,28 @@ class McapLog:
                 f"{schema.ENCODING!r} {schema.VEHICLES_TYPE!r}"
             )
 
+    def _chunk(self, f: IO[bytes], ref: mcap_read.ChunkRef) -> bytes | None:
+        """A chunk's verified records, or ``None`` (recorded in :attr:`damage`, warned once)."""
+        if ref.offset in self._lost_offsets:
+            return None
+        try:
+            return mcap_read.chunk_records(f, ref, self.file_bytes)
+        except (mcap_read.BadRecord, OSError, MemoryError) as err:
+            self._lost_offsets.add(ref.offset)
+            vehicles = self._channel_id(schema.VEHICLES_TOPIC)
+            frames = None
+            if vehicles is not None:
+                frames = mcap_read.count_messages(f, ref, vehicles, self.file_bytes)
+            loss = Loss("chunk", ref.offset, str(err), ref.start_ns / 1e9, ref.end_ns / 1e9, frames)
+            if self.damage.add(loss):
+                log.warning("%s: %s; the other chunks are read", self.path, loss.describe())
+            return None
+
     def _channel_id(self, topic: str) -> int | None:
         for cid, channel in self._channels.items():
             if channel.topic == topic:
                 return cid
         return None
-
-    @staticmethod
-    def _chunk_records(f: Any, ref: _ChunkRef) -> list[Any]:
-        f.seek(ref.offset)
-        chunk = next(StreamReader(f, skip_magic=True, emit_chunks=True).records)
-        if not isinstance(chunk, Chunk):
-            raise RecordingError(f"expected a chunk at byte {ref.offset}")
-        return breakup_chunk(chunk, validate_crc=True)
 
     # -- public properties -----------------------------------------------------------------
     @property
@@ -232,16 +190,32 @@ class McapLog:
         return self.all_metadata.get(METADATA_NAME, {})
 
     @property
+    def salvaged(self) -> bool:
+        """Whether the log is damaged or unfinished (see :attr:`damage` for what was lost)."""
+        return bool(self.damage)
+
+    @property
+    def recovered_bytes(self) -> int:
+        """Bytes of the file that could be used (the whole size when intact)."""
+        lost = sum(ref.length for ref in self._st.chunks if ref.offset in self._lost_offsets)
+        return max(self._st.good_bytes - lost, 0)
+
+    @property
     def time_range(self) -> tuple[float, float] | None:
         """First and last logged simulation time, s (``None`` for an empty log)."""
-        if self._time_range_ns is None:
+        chunks = self._st.chunks
+        if not chunks:
             return None
-        return self._time_range_ns[0] / 1e9, self._time_range_ns[1] / 1e9
+        return min(c.start_ns for c in chunks) / 1e9, max(c.end_ns for c in chunks) / 1e9
 
     @property
     def frame_count(self) -> int | None:
-        """Number of logged steps when the index says so (``None`` for salvaged logs)."""
-        return self._frame_count
+        """Number of logged steps when the index says so (``None`` for damaged logs)."""
+        counts = self._st.message_counts
+        vehicles = self._channel_id(schema.VEHICLES_TOPIC)
+        if counts is None or vehicles is None or self.damage:
+            return None
+        return counts.get(vehicles, 0)
 
     @property
     def topics(self) -> list[str]:
@@ -256,64 +230,55 @@ class McapLog:
         end_s: float | None = None,
     ) -> Iterator[MessageTriple]:
         """Raw ``(schema, channel, message)`` triples in log-time order, ``start_s``-``end_s``
-        inclusive. Intact logs read only the chunks that overlap the range."""
+        inclusive, from the chunks that overlap the range. A damaged chunk is skipped (and
+        added to :attr:`damage`); the others are read."""
         start_ns = None if start_s is None else to_ns(start_s)
         end_ns = None if end_s is None else to_ns(end_s)
-        wanted = None if topics is None else set(topics)
-        if self._scan is None:
-            yield from self._indexed_messages(wanted, start_ns, end_ns)
-        else:
-            yield from self._scanned_messages(self._scan, wanted, start_ns, end_ns)
-
-    def _indexed_messages(
-        self, topics: set[str] | None, start_ns: int | None, end_ns: int | None
-    ) -> Iterator[MessageTriple]:
         if start_ns is not None and end_ns is not None and end_ns < start_ns:
             return
+        wanted = None if topics is None else set(topics)
+        unpack, head = mcap_read.message_fields, mcap_read.MESSAGE_HEAD
         with open(self.path, "rb") as f:
-            reader = make_reader(f)
-            yield from reader.iter_messages(
-                topics=None if topics is None else sorted(topics),
-                starting_at=start_ns,
-                ending_at=end_ns,
-                # log-time order keeps decoding lazy: chunks are read one at a time (the
-                # insert-order queue would decompress every chunk before yielding).
-                log_time_order=True,
-            )
-
-    def _scanned_messages(
-        self, scan: _Scan, topics: set[str] | None, start_ns: int | None, end_ns: int | None
-    ) -> Iterator[MessageTriple]:
-        with open(self.path, "rb") as f:
-            for ref in scan.chunks:
+            for ref in self._st.chunks:
                 if (start_ns is not None and ref.end_ns < start_ns) or (
                     end_ns is not None and ref.start_ns > end_ns
                 ):
                     continue
-                try:
-                    records = self._chunk_records(f, ref)
-                except Exception as err:
-                    log.warning(
-                        "%s: chunk at byte %d is damaged (%s); stopping there",
-                        self.path,
-                        ref.offset,
-                        err,
-                    )
-                    return
-                for rec in records:
-                    if isinstance(rec, Schema):
-                        self._schemas[rec.id] = rec
-                    elif isinstance(rec, Channel):
-                        self._channels[rec.id] = rec
-                    elif isinstance(rec, Message):
-                        channel = self._channels.get(rec.channel_id)
-                        if channel is None or (topics is not None and channel.topic not in topics):
+                records = self._chunk(f, ref)
+                if records is None:
+                    continue
+                keep = self._wanted_channels(wanted)
+                for opcode, start, end in mcap_read.split_records(records):
+                    if opcode == OP_MESSAGE:
+                        channel_id, sequence, log_time, publish_time = unpack(records, start)
+                        channel = keep.get(channel_id)
+                        if channel is None:
                             continue
-                        if (start_ns is not None and rec.log_time < start_ns) or (
-                            end_ns is not None and rec.log_time > end_ns
+                        if (start_ns is not None and log_time < start_ns) or (
+                            end_ns is not None and log_time > end_ns
                         ):
                             continue
-                        yield self._schemas.get(channel.schema_id), channel, rec
+                        msg = Message(
+                            channel_id=channel_id,
+                            sequence=sequence,
+                            log_time=log_time,
+                            publish_time=publish_time,
+                            data=records[start + head : end],
+                        )
+                        yield self._schemas.get(channel.schema_id), channel, msg
+                    elif opcode == OP_SCHEMA:
+                        sch = mcap_read.parse_schema(records[start:end])
+                        self._schemas.setdefault(sch.id, sch)
+                    elif opcode == OP_CHANNEL:
+                        ch = mcap_read.parse_channel(records[start:end])
+                        if ch.id not in self._channels:
+                            self._channels[ch.id] = ch
+                            keep = self._wanted_channels(wanted)
+
+    def _wanted_channels(self, topics: set[str] | None) -> dict[int, Channel]:
+        return {
+            cid: ch for cid, ch in self._channels.items() if topics is None or ch.topic in topics
+        }
 
     def vehicle_messages(
         self, start_s: float | None = None, end_s: float | None = None

@@ -56,7 +56,7 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
             stream, profile=PROFILE, library="flowrun-repair", chunk_size=CHUNK_SIZE
         )
         for name, data in log.all_metadata.items():
-            writer.add_metadata(name, data)
+            writer.add_metadata(name, data, checksum=True)
         for name, blob in log.attachments.items():
             writer.add_attachment(name, media_type(name), blob)
         schema_ids: dict[int, int] = {}

@@ -110,7 +110,7 @@ class McapRecorder:
                 self._stream, profile=PROFILE, library="flowrun", chunk_size=chunk_size
             )
             meta = {str(k): str(v) for k, v in (metadata or {}).items()}
-            self._writer.add_metadata(METADATA_NAME, meta)
+            self._writer.add_metadata(METADATA_NAME, meta, checksum=True)
             for name, data in (attachments or {}).items():
                 self._writer.add_attachment(
                     name, media_type(name), bytes(data), log_time=0, create_time=time.time_ns()
@@ -215,7 +215,9 @@ class McapRecorder:
         try:
             # How many different rosters (ids/types/RL flags) the frames had: with one, a
             # reader may take the roster from the first frame and skip decoding the rest.
-            self._writer.add_metadata(ROSTER_METADATA, {"rosters": str(self._roster_version)})
+            self._writer.add_metadata(
+                ROSTER_METADATA, {"rosters": str(self._roster_version)}, checksum=True
+            )
             self._writer.finish()
         finally:
             self._stream.close()

@@ -1,0 +1,506 @@
+"""Checked low-level reading of MCAP files: every length is bounds-checked, every CRC the
+format carries is verified, and damage is skipped over instead of ending the read.
+
+Written from the MCAP specification (https://mcap.dev/spec). How a file is opened:
+
+1. The footer (last 37 bytes before the closing magic) points at the summary section; the
+   summary CRC (over the summary, the summary offsets and the footer up to the CRC) is
+   checked, and the summary's chunk, metadata and attachment indexes are used. Metadata
+   records are re-read and checked (their ``flowrun_crc32`` entry, see
+   :func:`~flowrun.recording.mcap_file.metadata_crc`); attachments by their own CRC.
+2. Without a usable footer/summary, the data section is scanned record by record. A record
+   whose opcode or length cannot be right ends the walk there; the scan then looks forward
+   for the next chunk (its header's ``zstd`` compression field is a 8-byte pattern, and the
+   header's sizes must agree) and carries on, so one bad byte costs one chunk, not the rest.
+
+Chunks are decompressed (size-capped) and checked against their ``uncompressed_crc`` when
+their messages are read; a bad chunk raises :class:`BadRecord` and the caller skips it.
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from dataclasses import dataclass, field
+from typing import IO
+
+import zstandard
+from mcap.records import Channel, Schema
+
+from flowrun.recording.damage import DamageReport, Loss
+from flowrun.recording.mcap_file import (
+    CRC_KEY,
+    MAGIC,
+    OP_ATTACHMENT,
+    OP_ATTACHMENT_INDEX,
+    OP_CHANNEL,
+    OP_CHUNK,
+    OP_CHUNK_INDEX,
+    OP_DATA_END,
+    OP_FOOTER,
+    OP_HEADER,
+    OP_MESSAGE_INDEX,
+    OP_METADATA,
+    OP_METADATA_INDEX,
+    OP_SCHEMA,
+    OP_STATISTICS,
+    metadata_crc,
+)
+
+_U16 = struct.Struct("<H")
+_U32 = struct.Struct("<I")
+_U64 = struct.Struct("<Q")
+_HEAD = struct.Struct("<BQ")
+_MSG = struct.Struct("<HIQQ")
+_CHUNK_FIXED = struct.Struct("<QQQI")
+_FOOTER = struct.Struct("<BQQQI")
+_KNOWN_OPS = frozenset(range(OP_HEADER, OP_DATA_END + 1))
+_ZSTD_FIELD = b"\x04\x00\x00\x00zstd"  # a chunk header's compression string
+_ZSTD_AT = _HEAD.size + _CHUNK_FIXED.size  # where it stands in a chunk record
+MAX_CHUNK_BYTES = 1 << 31
+"""Largest uncompressed chunk accepted (a damaged size field must not allocate more)."""
+
+
+class BadRecord(Exception):
+    """A record that cannot be what the writer wrote (internal; callers turn it into a
+    :class:`~flowrun.recording.damage.Loss`)."""
+
+
+class _Cursor:
+    """Reads the spec's little-endian fields from a buffer, never past ``end``."""
+
+    def __init__(self, buf: bytes, pos: int = 0, end: int | None = None) -> None:
+        self.buf, self.pos = buf, pos
+        self.end = len(buf) if end is None else end
+
+    def take(self, n: int) -> bytes:
+        if n < 0 or self.pos + n > self.end:
+            raise BadRecord(f"a field of {n} bytes runs past its record")
+        out = self.buf[self.pos : self.pos + n]
+        self.pos += n
+        return out
+
+    def unpack(self, fmt: struct.Struct) -> tuple[int, ...]:
+        return fmt.unpack(self.take(fmt.size))
+
+    def u16(self) -> int:
+        return int(self.unpack(_U16)[0])
+
+    def u32(self) -> int:
+        return int(self.unpack(_U32)[0])
+
+    def u64(self) -> int:
+        return int(self.unpack(_U64)[0])
+
+    def string(self) -> str:
+        try:
+            return self.take(self.u32()).decode("utf-8")
+        except UnicodeDecodeError as err:
+            raise BadRecord(f"a string is not UTF-8 ({err.reason})") from None
+
+    def string_map(self) -> dict[str, str]:
+        n = self.u32()
+        sub = _Cursor(self.buf, self.pos, self.pos + n)
+        self.take(n)
+        out: dict[str, str] = {}
+        while sub.pos < sub.end:
+            k = sub.string()
+            out[k] = sub.string()
+        return out
+
+    def int_map(self) -> dict[int, int]:
+        n = self.u32()
+        sub = _Cursor(self.buf, self.pos, self.pos + n)
+        self.take(n)
+        out: dict[int, int] = {}
+        while sub.pos < sub.end:
+            k = sub.u16()
+            out[k] = sub.u64()
+        return out
+
+
+@dataclass
+class ChunkRef:
+    """Where a chunk is and what the index (or its header) says it holds.
+
+    Attributes:
+        offset: byte offset of the Chunk record.
+        length: record length with opcode and length field, bytes.
+        start_ns: first message log time, ns.
+        end_ns: last message log time, ns.
+        indexed: whether the fields come from the CRC-checked summary (else from the
+            chunk's own header, unchecked until the chunk is read).
+        message_indexes: channel id -> offset of its Message Index record (for counting
+            what a damaged chunk held).
+    """
+
+    offset: int
+    length: int
+    start_ns: int
+    end_ns: int
+    indexed: bool
+    message_indexes: dict[int, int] = field(default_factory=dict)
+
+
+@dataclass
+class Structure:
+    """What opening a file found (before any chunk is decompressed)."""
+
+    size: int
+    profile: str = ""
+    schemas: dict[int, Schema] = field(default_factory=dict)
+    channels: dict[int, Channel] = field(default_factory=dict)
+    chunks: list[ChunkRef] = field(default_factory=list)
+    metadata: dict[str, dict[str, str]] = field(default_factory=dict)
+    attachments: dict[str, bytes] = field(default_factory=dict)
+    message_counts: dict[int, int] | None = None
+    indexed: bool = False
+    good_bytes: int = 0
+    damage: DamageReport = field(default_factory=DamageReport)
+
+
+def _read(f: IO[bytes], offset: int, n: int) -> bytes:
+    f.seek(offset)
+    return f.read(n)
+
+
+# -- records -------------------------------------------------------------------------------
+def parse_metadata(content: bytes) -> tuple[str, dict[str, str], bool | None]:
+    """A Metadata record's name and entries, and whether its ``flowrun_crc32`` entry matched
+    (``None`` when it has none: written by another tool or an older flowrun)."""
+    cur = _Cursor(content)
+    name = cur.string()
+    entries = cur.string_map()
+    stored = entries.pop(CRC_KEY, None)
+    if stored is None:
+        return name, entries, None
+    return name, entries, stored == f"{metadata_crc(name, entries):08x}"
+
+
+def parse_attachment(content: bytes) -> tuple[str, bytes]:
+    """An Attachment record's name and data; raises :class:`BadRecord` on a CRC mismatch."""
+    cur = _Cursor(content)
+    cur.take(16)  # log and create time
+    name = cur.string()
+    cur.string()  # media type
+    data = cur.take(cur.u64())
+    fields_end = cur.pos
+    crc = cur.u32()
+    if crc and zlib.crc32(content[:fields_end]) != crc:
+        raise BadRecord("attachment CRC mismatch")
+    return name, data
+
+
+def parse_schema(content: bytes) -> Schema:
+    cur = _Cursor(content)
+    sid = cur.u16()
+    name, encoding = cur.string(), cur.string()
+    return Schema(id=sid, name=name, encoding=encoding, data=cur.take(cur.u32()))
+
+
+def parse_channel(content: bytes) -> Channel:
+    cur = _Cursor(content)
+    cid, sid = cur.u16(), cur.u16()
+    topic, encoding = cur.string(), cur.string()
+    return Channel(
+        id=cid, schema_id=sid, topic=topic, message_encoding=encoding, metadata=cur.string_map()
+    )
+
+
+@dataclass(frozen=True)
+class ChunkHeader:
+    """A Chunk record's header fields."""
+
+    start_ns: int
+    end_ns: int
+    uncompressed_size: int
+    crc: int
+    compression: str
+    data_offset: int
+    data_size: int
+    length: int
+
+
+def parse_chunk_header(head: bytes, offset: int, size: int) -> ChunkHeader:
+    """The header of the Chunk record at ``offset`` (``head``: its first bytes).
+
+    Raises:
+        BadRecord: not a chunk, or its fields disagree with each other or the file size.
+    """
+    cur = _Cursor(head)
+    opcode, length = cur.unpack(_HEAD)
+    if opcode != OP_CHUNK:
+        raise BadRecord(f"expected a chunk record, found opcode 0x{opcode:02x}")
+    if offset + _HEAD.size + length > size:
+        raise BadRecord(f"chunk record of {length} bytes runs past the end of the file")
+    start, end, usize, crc = cur.unpack(_CHUNK_FIXED)
+    compression = cur.string()
+    csize = cur.u64()
+    if cur.pos + csize != _HEAD.size + length or end < start or usize > MAX_CHUNK_BYTES:
+        raise BadRecord("chunk header fields are inconsistent")
+    return ChunkHeader(start, end, usize, crc, compression, offset + cur.pos, csize, length + 9)
+
+
+def chunk_records(f: IO[bytes], ref: ChunkRef, size: int) -> bytes:
+    """The verified, decompressed records of a chunk.
+
+    Raises:
+        BadRecord: the chunk's header, compression or CRC is wrong.
+    """
+    head = parse_chunk_header(_read(f, ref.offset, 128), ref.offset, size)
+    if ref.indexed and (head.length, head.start_ns, head.end_ns) != (
+        ref.length,
+        ref.start_ns,
+        ref.end_ns,
+    ):
+        raise BadRecord("chunk header disagrees with the index")
+    data = _read(f, head.data_offset, head.data_size)
+    if head.compression == "zstd":
+        if zstandard.frame_content_size(data) != head.uncompressed_size:
+            raise BadRecord("compressed data does not match the chunk's size")
+        try:
+            records = zstandard.ZstdDecompressor().decompress(
+                data, max_output_size=head.uncompressed_size
+            )
+        except zstandard.ZstdError as err:
+            raise BadRecord(f"zstd: {err}") from None
+    elif head.compression == "":
+        records = data
+    else:
+        raise BadRecord(f"unknown compression {head.compression[:16]!r}")
+    if len(records) != head.uncompressed_size:
+        raise BadRecord("decompressed size differs from the chunk's")
+    if head.crc and zlib.crc32(records) != head.crc:
+        raise BadRecord("CRC mismatch")
+    return records
+
+
+def split_records(records: bytes) -> list[tuple[int, int, int]]:
+    """``(opcode, content start, content end)`` of each record in a chunk's records."""
+    out: list[tuple[int, int, int]] = []
+    pos, n, head = 0, len(records), _HEAD.unpack_from
+    while pos < n:
+        if pos + 9 > n:
+            raise BadRecord("a record inside the chunk is cut short")
+        opcode, length = head(records, pos)
+        start = pos + 9
+        pos = start + length
+        if pos > n:
+            raise BadRecord("a record inside the chunk runs past it")
+        out.append((opcode, start, pos))
+    return out
+
+
+def message_fields(records: bytes, start: int) -> tuple[int, int, int, int]:
+    """``(channel id, sequence, log time, publish time)`` of the Message content at ``start``."""
+    return _MSG.unpack_from(records, start)
+
+
+MESSAGE_HEAD = _MSG.size
+
+
+def count_messages(f: IO[bytes], ref: ChunkRef, channel_id: int, size: int) -> int | None:
+    """Messages of ``channel_id`` in a chunk, from its Message Index record (``None`` when
+    it has none or it is unreadable)."""
+    offset = ref.message_indexes.get(channel_id)
+    if offset is None or offset + 15 > size:
+        return None
+    opcode, length, channel, nbytes = struct.unpack("<BQHI", _read(f, offset, 15))
+    if opcode != OP_MESSAGE_INDEX or channel != channel_id or nbytes % 16 or nbytes + 6 != length:
+        return None
+    return nbytes // 16
+
+
+# -- opening -------------------------------------------------------------------------------
+def read_structure(f: IO[bytes], size: int) -> Structure:
+    """Everything but the chunks' contents: from the summary if it is intact, else by a scan."""
+    st = Structure(size=size)
+    reason = _from_summary(f, st)
+    if reason is None:
+        st.indexed, st.good_bytes = True, size
+        return st
+    st.schemas, st.channels, st.chunks = {}, {}, []
+    st.metadata, st.attachments, st.message_counts = {}, {}, None
+    if reason != "no footer":
+        st.damage.add(Loss("index", size, f"{reason}; the data section was scanned instead"))
+    _scan(f, st)
+    return st
+
+
+def _from_summary(f: IO[bytes], st: Structure) -> str | None:
+    """Fill ``st`` from the summary; returns why it cannot be used (``None``: it was)."""
+    size = st.size
+    footer_at = size - len(MAGIC) - _FOOTER.size
+    if footer_at < len(MAGIC) or _read(f, size - len(MAGIC), len(MAGIC)) != MAGIC:
+        return "no footer"
+    opcode, length, summary_start, _, crc = _FOOTER.unpack(_read(f, footer_at, _FOOTER.size))
+    if opcode != OP_FOOTER or length != 20 or not len(MAGIC) < summary_start <= footer_at:
+        return "footer damaged"
+    blob = _read(f, summary_start, footer_at + _FOOTER.size - 4 - summary_start)
+    if crc and zlib.crc32(blob) != crc:
+        return "summary CRC mismatch"
+    cur = _Cursor(blob, 0, footer_at - summary_start)
+    meta_index: list[tuple[int, int, str]] = []
+    attach_index: list[tuple[int, int, str]] = []
+    try:
+        while cur.pos < cur.end:
+            opcode, length = cur.unpack(_HEAD)
+            content = cur.take(length)
+            body = _Cursor(content)
+            if opcode == OP_SCHEMA:
+                sch = parse_schema(content)
+                st.schemas[sch.id] = sch
+            elif opcode == OP_CHANNEL:
+                ch = parse_channel(content)
+                st.channels[ch.id] = ch
+            elif opcode == OP_STATISTICS:
+                body.take(8 + 2 + 4 * 4 + 16)
+                st.message_counts = body.int_map()
+            elif opcode == OP_CHUNK_INDEX:
+                start, end, offset, chunk_length = body.unpack(struct.Struct("<QQQQ"))
+                indexes = body.int_map()
+                st.chunks.append(ChunkRef(offset, chunk_length, start, end, True, indexes))
+            elif opcode == OP_METADATA_INDEX:
+                offset, rec_length = body.u64(), body.u64()
+                meta_index.append((offset, rec_length, body.string()))
+            elif opcode == OP_ATTACHMENT_INDEX:
+                offset, rec_length = body.u64(), body.u64()
+                body.take(24)
+                attach_index.append((offset, rec_length, body.string()))
+    except BadRecord as err:
+        return f"summary unreadable ({err})"
+    for offset, rec_length, name in meta_index:
+        _load_side_record(f, st, OP_METADATA, offset, rec_length, name)
+    for offset, rec_length, name in attach_index:
+        _load_side_record(f, st, OP_ATTACHMENT, offset, rec_length, name)
+    st.chunks.sort(key=lambda c: (c.start_ns, c.offset))
+    return None
+
+
+def _load_side_record(
+    f: IO[bytes], st: Structure, opcode: int, offset: int, length: int, name: str
+) -> None:
+    """Read the metadata/attachment record an index points at; a bad one becomes a Loss."""
+    part = "metadata" if opcode == OP_METADATA else "attachment"
+    try:
+        if offset + length > st.size or length < 9:
+            raise BadRecord("the index points past the end of the file")
+        rec = _read(f, offset, length)
+        op, content_length = _HEAD.unpack_from(rec)
+        if op != opcode or content_length != length - 9:
+            raise BadRecord("record header damaged")
+        _add_side_record(st, opcode, rec[9:], offset)
+    except BadRecord as err:
+        st.damage.add(Loss(part, offset, str(err), name=name))
+
+
+def _add_side_record(st: Structure, opcode: int, content: bytes, offset: int) -> None:
+    if opcode == OP_METADATA:
+        name, entries, ok = parse_metadata(content)
+        if ok is False:
+            raise BadRecord("metadata CRC mismatch")
+        st.metadata[name] = entries
+    else:
+        name, data = parse_attachment(content)
+        st.attachments[name] = data
+
+
+def _scan(f: IO[bytes], st: Structure) -> None:
+    """Walk the data section; skip damage forward to the next chunk."""
+    size, pos = st.size, len(MAGIC)
+    last_chunk: ChunkRef | None = None
+    while pos < size:
+        head = _read(f, pos, 9)
+        if len(head) < 9:
+            st.damage.add(Loss("tail", pos, "the file ends inside a record", frames=None))
+            break
+        opcode, length = _HEAD.unpack(head)
+        end = pos + 9 + length
+        if opcode == OP_CHUNK and end > size:
+            _lost_tail(f, st, pos)
+            break
+        if opcode not in _KNOWN_OPS or end > size:
+            after = _resync(f, pos + 1, size)
+            lo = last_chunk.end_ns / 1e9 if last_chunk else None
+            hi = after[1] / 1e9 if after else None
+            why = f"unreadable record (opcode 0x{opcode:02x}, {length} bytes)"
+            if after is None:
+                st.damage.add(Loss("tail", pos, f"{why}; no readable chunk after it", lo, hi))
+                break
+            st.damage.add(
+                Loss("chunk", pos, f"{why}; skipped {after[0] - pos} bytes", lo, hi, None)
+            )
+            pos = after[0]
+            continue
+        if opcode == OP_CHUNK:
+            try:
+                hdr = parse_chunk_header(_read(f, pos, 128), pos, size)
+            except BadRecord as err:
+                st.damage.add(Loss("chunk", pos, str(err)))
+            else:
+                last_chunk = ChunkRef(pos, hdr.length, hdr.start_ns, hdr.end_ns, False)
+                st.chunks.append(last_chunk)
+        elif opcode == OP_MESSAGE_INDEX and last_chunk is not None and length >= 6:
+            channel = _U16.unpack(_read(f, pos + 9, 2))[0]
+            last_chunk.message_indexes.setdefault(channel, pos)
+        elif opcode in (OP_FOOTER, OP_DATA_END):
+            st.good_bytes = end
+            if opcode == OP_DATA_END and not any(x.part == "index" for x in st.damage.losses):
+                st.damage.add(Loss("index", pos, "the summary after Data End is unusable"))
+            return
+        elif opcode in (OP_HEADER, OP_SCHEMA, OP_CHANNEL, OP_METADATA, OP_ATTACHMENT):
+            _scan_small_record(f, st, opcode, pos, length)
+        st.good_bytes = pos = end
+    if not any(x.part in ("tail", "index") for x in st.damage.losses):
+        st.damage.add(Loss("unfinished", size, "no footer: the log was not closed", frames=0))
+
+
+def _scan_small_record(f: IO[bytes], st: Structure, opcode: int, pos: int, length: int) -> None:
+    try:
+        if length > 1 << 30:
+            raise BadRecord("record too large")
+        content = _read(f, pos + 9, length)
+        if opcode == OP_HEADER:
+            st.profile = _Cursor(content).string()
+        elif opcode == OP_SCHEMA:
+            sch = parse_schema(content)
+            st.schemas[sch.id] = sch
+        elif opcode == OP_CHANNEL:
+            ch = parse_channel(content)
+            st.channels[ch.id] = ch
+        else:
+            _add_side_record(st, opcode, content, pos)
+    except BadRecord as err:
+        part = {OP_METADATA: "metadata", OP_ATTACHMENT: "attachment"}.get(opcode, "record")
+        st.damage.add(Loss(part, pos, str(err)))
+
+
+def _lost_tail(f: IO[bytes], st: Structure, pos: int) -> None:
+    """The file ends inside the chunk at ``pos``: report what its header says it held."""
+    head = _read(f, pos, 128)
+    start = end = None
+    if len(head) >= _ZSTD_AT:
+        start_ns, end_ns = struct.unpack_from("<QQ", head, 9)
+        if end_ns >= start_ns:
+            start, end = start_ns / 1e9, end_ns / 1e9
+    st.damage.add(Loss("tail", pos, "the file ends inside this chunk (cut short)", start, end))
+
+
+def _resync(f: IO[bytes], pos: int, size: int) -> tuple[int, int] | None:
+    """``(offset, start_ns)`` of the first well-formed chunk at or after ``pos``."""
+    block, origin = 4 << 20, pos
+    while pos < size:
+        buf = _read(f, pos, block + len(_ZSTD_FIELD))
+        hit = buf.find(_ZSTD_FIELD)
+        while hit >= 0:
+            at = pos + hit - _ZSTD_AT
+            if at >= origin:
+                try:
+                    hdr = parse_chunk_header(_read(f, at, 128), at, size)
+                except BadRecord:
+                    pass
+                else:
+                    return at, hdr.start_ns
+            hit = buf.find(_ZSTD_FIELD, hit + 1)
+        pos += block
+    return None
