@@ -13,6 +13,8 @@ from flowrun.config import (
     ExperimentConfig,
     SumoParams,
     TrainConfig,
+    VehicleParams,
+    VehicleType,
     config_from_dict,
     load_config,
 )
@@ -75,8 +77,18 @@ def test_sugiyama_yaml_loads_into_flow_parameter_objects(tmp_path: Path) -> None
 def test_omitted_sections_are_flow_defaults_and_name_defaults_to_file_stem(
     tmp_path: Path,
 ) -> None:
-    cfg = load_config(write(tmp_path, "", name="ring_wave.yaml"))
-    assert cfg == ExperimentConfig(name="ring_wave")
+    cfg = load_config(write(tmp_path, "vehicles: [{id: a, count: 2}]\n", name="ring_wave.yaml"))
+    assert cfg == ExperimentConfig(
+        name="ring_wave", vehicles=VehicleParams([VehicleType("a", num_vehicles=2)])
+    )
+
+
+def test_an_empty_config_file_is_refused_with_its_name(tmp_path: Path) -> None:
+    for text in ("", "# only a comment\n", "---\n"):
+        path = write(tmp_path, text, name="empty.yaml")
+        with pytest.raises(ConfigError, match="empty") as err:
+            load_config(path)
+        assert err.value.location == str(path)
 
 
 def test_empty_section_means_defaults_but_empty_train_means_no_training(

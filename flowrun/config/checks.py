@@ -6,6 +6,8 @@
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Callable, Collection
 from typing import Any
 
@@ -36,32 +38,81 @@ SIM_BACKENDS = ("sumo", "numpy")
 TRAIN_BACKENDS = ("sb3", "rllib")
 
 
-def positive(hint: str = "") -> Check:
-    """Require ``value > 0`` (``None`` passes: it means "not set")."""
+#: Largest magnitude accepted for a length, distance or position, m (1000 km).
+MAX_METRES = 1e6
+#: Largest speed accepted, m/s (far above any road; beyond it a value is a typo or overflow).
+MAX_SPEED = 1e3
+#: Largest simulation step, s (SUMO's models are written for steps of a second or less).
+MAX_STEP = 10.0
+#: Most vehicles in one group or inflow (SUMO handles tens of thousands; more is a typo).
+MAX_VEHICLES = 100_000
+#: Most steps of a horizon or warm-up.
+MAX_STEPS = 10**9
+
+
+def _finite(value: Any, allow_inf: bool) -> str | None:
+    """A message for NaN, and for +-inf unless ``allow_inf``; ``None`` for other values."""
+    if not isinstance(value, float):
+        return None
+    if math.isnan(value):
+        return "must be a number, got .nan"
+    if math.isinf(value) and not allow_inf:
+        return f"must be finite, got {value!r}"
+    return None
+
+
+def _upper(value: Any, high: float | None, unit: str) -> str | None:
+    if high is None or value is None or isinstance(value, bool) or value <= high:
+        return None
+    if math.isinf(value):
+        return None  # allowed (``allow_inf``): infinity means "no limit"
+    return f"must be at most {high:g}{unit}, got {value!r}"
+
+
+def positive(hint: str = "", high: float | None = None, unit: str = "",
+             allow_inf: bool = False) -> Check:
+    """Require a finite ``value > 0`` (``None`` passes: it means "not set").
+
+    Args:
+        hint: appended to the message (how to fix it).
+        high: largest value that makes sense, if any.
+        unit: unit of ``high`` in the message (`` m``).
+        allow_inf: accept ``.inf`` (it means "no limit").
+    """
     suffix = f"; {hint}" if hint else ""
 
     def check(value: Any) -> str | None:
-        if value is None or value > 0:
+        if value is None:
             return None
-        return f"must be greater than 0, got {value!r}{suffix}"
+        problem = _finite(value, allow_inf)
+        if problem is None and not value > 0:
+            problem = f"must be greater than 0, got {value!r}"
+        problem = problem or _upper(value, high, unit)
+        return f"{problem}{suffix}" if problem else None
 
     return check
 
 
-def at_least(low: float, hint: str = "") -> Check:
-    """Require ``value >= low`` (``None`` passes: it means "not set")."""
+def at_least(low: float, hint: str = "", high: float | None = None, unit: str = "",
+             allow_inf: bool = False) -> Check:
+    """Require a finite ``value >= low`` (``None`` passes: it means "not set"); see
+    :func:`positive` for the other arguments."""
     suffix = f"; {hint}" if hint else ""
 
     def check(value: Any) -> str | None:
-        if value is None or value >= low:
+        if value is None:
             return None
-        return f"must be at least {low:g}, got {value!r}{suffix}"
+        problem = _finite(value, allow_inf)
+        if problem is None and not value >= low:
+            problem = f"must be at least {low:g}, got {value!r}"
+        problem = problem or _upper(value, high, unit)
+        return f"{problem}{suffix}" if problem else None
 
     return check
 
 
 def between(low: float, high: float) -> Check:
-    """Require ``low <= value <= high``."""
+    """Require ``low <= value <= high`` (NaN fails)."""
 
     def check(value: Any) -> str | None:
         if value is None or low <= value <= high:
@@ -69,6 +120,76 @@ def between(low: float, high: float) -> Check:
         return f"must be between {low:g} and {high:g}, got {value!r}"
 
     return check
+
+
+def magnitude(high: float, unit: str = "") -> Check:
+    """Require a finite value with ``|value| <= high`` (any sign)."""
+
+    def check(value: Any) -> str | None:
+        if value is None:
+            return None
+        problem = _finite(value, False)
+        if problem is None and abs(value) > high:
+            problem = f"must be between {-high:g} and {high:g}{unit}, got {value!r}"
+        return problem
+
+    return check
+
+
+def _steps(value: Any) -> str | None:
+    """``env.horizon``: a whole number of steps >= 1, or ``.inf``."""
+    problem = positive("use .inf for no limit", high=MAX_STEPS, allow_inf=True)(value)
+    if problem is None and math.isfinite(value) and value != int(value):
+        problem = f"must be a whole number of steps, got {value!r}"
+    return problem
+
+
+def _teleport_time(value: Any) -> str | None:
+    """SUMO ``--time-to-teleport``: finite seconds; a negative value turns teleporting off."""
+    problem = _finite(value, False)
+    if problem:
+        return f"{problem}; use -1 to turn teleporting off"
+    return None
+
+
+def _color(value: Any) -> str | None:
+    """A colour SUMO reads: a name, ``r,g,b[,a]`` (0-255, or 0-1 floats) or ``#rrggbb[aa]``."""
+    if value is None or value.lower() in SUMO_COLOURS:
+        return None
+    if re.fullmatch(r"#(?:[0-9a-fA-F]{6}|[0-9a-fA-F]{8})", value):
+        return None
+    parts = value.split(",")
+    if len(parts) in (3, 4):
+        try:
+            numbers = [float(p) for p in parts]
+        except ValueError:
+            numbers = []
+        if numbers and all(0 <= x <= 255 for x in numbers):
+            return None
+    return (
+        f"SUMO cannot read the colour {value!r}; write a name ({', '.join(SUMO_COLOURS[:6])}, "
+        "...), 'r,g,b' with 0-255 values (or 0-1 floats), or '#rrggbb'"
+    )
+
+
+#: Colour names SUMO knows (``RGBColor::parseColor``).
+SUMO_COLOURS = ("red", "green", "blue", "yellow", "cyan", "magenta", "orange", "white",
+                "black", "grey", "gray", "invisible", "random")  # fmt: skip
+#: Characters SUMO refuses in a vehicle or vehicle-type id (``SUMOXMLDefinitions``).
+SUMO_ID_FORBIDDEN = " \t\n\r|\\'\";,<>&"
+
+
+def _vehicle_id(value: Any) -> str | None:
+    if not value:
+        return "must not be empty"
+    bad = sorted({c for c in value if c in SUMO_ID_FORBIDDEN or not c.isprintable()})
+    if bad:
+        shown = ", ".join(repr(c) for c in bad)
+        return (
+            f"SUMO refuses the character(s) {shown} in vehicle ids, got {value!r}; use letters, "
+            "digits, '_', '-' or '.'"
+        )
+    return None
 
 
 def one_of(kind: str, names: Collection[str], allow_int: bool = False) -> Check:
@@ -106,59 +227,75 @@ def _not_empty(value: Any) -> str | None:
     return None if value is None or value else "must not be empty"
 
 
+M, SPEED = " m", " m/s"
+
 FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (ExperimentConfig, "name"): _name,
-    (SumoParams, "sim_step"): positive(),
+    (SumoParams, "sim_step"): positive(high=MAX_STEP, unit=" s"),
     (SumoParams, "seed"): at_least(0),
     (SumoParams, "port"): between(0, 65535),
     (SumoParams, "num_clients"): at_least(1),
-    (SumoParams, "sight_radius"): at_least(0),
-    (SumoParams, "pxpm"): positive(),
+    (SumoParams, "sight_radius"): at_least(0, high=MAX_METRES, unit=M),
+    (SumoParams, "pxpm"): positive(high=1e4),
     (SumoParams, "backend"): one_of("sim backend", SIM_BACKENDS),
-    (EnvParams, "horizon"): positive("use .inf for no limit"),
-    (EnvParams, "warmup_steps"): at_least(0),
-    (EnvParams, "sims_per_step"): at_least(1),
+    (SumoParams, "teleport_time"): _teleport_time,
+    (SumoParams, "lateral_resolution"): positive(high=100, unit=M),
+    (EnvParams, "horizon"): _steps,
+    (EnvParams, "warmup_steps"): at_least(0, high=MAX_STEPS),
+    (EnvParams, "sims_per_step"): at_least(1, high=10_000),
     (EnvParams, "env_class"): _not_empty,
     (InitialConfig, "spacing"): one_of("spacing", SPACINGS),
-    (InitialConfig, "min_gap"): at_least(0),
-    (InitialConfig, "perturbation"): at_least(0),
-    (InitialConfig, "lanes_distribution"): at_least(1, "use .inf for all lanes"),
-    (VehicleType, "veh_id"): _not_empty,
-    (VehicleType, "num_vehicles"): at_least(0),
-    (VehicleType, "initial_speed"): at_least(0),
+    (InitialConfig, "min_gap"): at_least(0, high=MAX_METRES, unit=M),
+    (InitialConfig, "perturbation"): at_least(0, high=MAX_METRES, unit=M),
+    (InitialConfig, "x0"): magnitude(MAX_METRES, M),
+    (InitialConfig, "bunching"): magnitude(MAX_METRES, M),
+    (InitialConfig, "lanes_distribution"): at_least(1, "use .inf for all lanes", allow_inf=True),
+    (VehicleType, "veh_id"): _vehicle_id,
+    (VehicleType, "num_vehicles"): at_least(0, high=MAX_VEHICLES),
+    (VehicleType, "initial_speed"): at_least(0, high=MAX_SPEED, unit=SPEED),
+    (VehicleType, "color"): _color,
     (SumoCarFollowingParams, "speed_mode"): one_of("speed_mode", SPEED_MODES, allow_int=True),
-    (SumoCarFollowingParams, "accel"): positive(),
-    (SumoCarFollowingParams, "decel"): positive(),
+    (SumoCarFollowingParams, "accel"): positive(high=1e3, unit=" m/s^2"),
+    (SumoCarFollowingParams, "decel"): positive(high=1e3, unit=" m/s^2"),
     (SumoCarFollowingParams, "sigma"): between(0, 1),
-    (SumoCarFollowingParams, "tau"): at_least(0),
-    (SumoCarFollowingParams, "min_gap"): at_least(0),
-    (SumoCarFollowingParams, "max_speed"): positive(),
-    (SumoCarFollowingParams, "speed_factor"): positive(),
-    (SumoCarFollowingParams, "speed_dev"): at_least(0),
-    (SumoCarFollowingParams, "length"): positive(),
+    (SumoCarFollowingParams, "tau"): at_least(0, high=1e3, unit=" s"),
+    (SumoCarFollowingParams, "min_gap"): at_least(0, high=MAX_METRES, unit=M),
+    (SumoCarFollowingParams, "max_speed"): positive(high=MAX_SPEED, unit=SPEED),
+    (SumoCarFollowingParams, "speed_factor"): positive(high=100),
+    (SumoCarFollowingParams, "speed_dev"): at_least(0, high=100),
+    (SumoCarFollowingParams, "impatience"): between(0, 1),
+    (SumoCarFollowingParams, "length"): positive(high=1e4, unit=M),
     (SumoLaneChangeParams, "lane_change_mode"): _lane_change_mode,
     (SumoLaneChangeParams, "model"): one_of("lane-change model", LANE_CHANGE_MODELS),
-    (InFlow, "vehs_per_hour"): positive(),
+    (InFlow, "vehs_per_hour"): positive(high=1e6),
     (InFlow, "probability"): between(0, 1),
-    (InFlow, "period"): positive(),
-    (InFlow, "begin"): at_least(1, "vehicles placed at reset come first"),
-    (InFlow, "number"): at_least(1),
-    (InFlow, "end"): at_least(0),
+    (InFlow, "period"): positive(high=1e9, unit=" s"),
+    (InFlow, "begin"): at_least(1, "vehicles placed at reset come first", high=1e9),
+    (InFlow, "number"): at_least(1, high=MAX_VEHICLES),
+    (InFlow, "end"): at_least(0, high=1e9),
     (TrainConfig, "algorithm"): one_of("algorithm", ALGORITHMS),
-    (TrainConfig, "total_timesteps"): at_least(1),
-    (TrainConfig, "n_envs"): at_least(1),
+    (TrainConfig, "total_timesteps"): at_least(1, high=1e13),
+    (TrainConfig, "n_envs"): at_least(1, high=1024),
     (TrainConfig, "seed"): at_least(0),
     (TrainConfig, "eval_freq"): at_least(0),
-    (TrainConfig, "eval_episodes"): at_least(1),
+    (TrainConfig, "eval_episodes"): at_least(1, high=1e6),
     (TrainConfig, "checkpoint_freq"): at_least(0),
     (TrainConfig, "backend"): one_of("training backend", TRAIN_BACKENDS),
 }
 
+#: Float fields whose default is infinite (or which mean "no limit" at .inf): the only floats
+#: that may be .inf. Every float field refuses .nan (see ``Converter``).
+INFINITE_OK: frozenset[tuple[type, str]] = frozenset({
+    (EnvParams, "horizon"),
+    (InitialConfig, "lanes_distribution"),
+    (SumoLaneChangeParams, "lc_time_to_impatience"),
+})  # fmt: skip
+
 # Network parameters shared by Flow's networks; checked here when present, whatever the type.
 # Everything network-specific is checked by ``flowrun.networks.registry.validate_network``.
 NETWORK_NUMBERS: dict[str, tuple[type, Check]] = {
-    "length": (float, positive()),
-    "speed_limit": (float, positive()),
+    "length": (float, positive(high=MAX_METRES, unit=" m")),
+    "speed_limit": (float, positive(high=MAX_SPEED, unit=" m/s")),
     "lanes": (int, at_least(1)),
     "resolution": (int, at_least(1)),
 }

@@ -11,11 +11,12 @@ from __future__ import annotations
 import copy
 import dataclasses
 import functools
+import math
 import types
 from collections.abc import Mapping
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
-from flowrun.config.checks import FIELD_CHECKS, NETWORK_NUMBERS
+from flowrun.config.checks import FIELD_CHECKS, INFINITE_OK, NETWORK_NUMBERS
 from flowrun.config.inflows import CAMEL_CASE
 from flowrun.config.model import NetworkConfig
 from flowrun.config.params import (
@@ -156,6 +157,11 @@ class Converter:
                     f"'{key}' and '{given_as[name]}' are the same setting; give only one", at
                 )
             value = self.value(hints[name], raw, at)
+            if isinstance(value, float) and not math.isfinite(value):
+                if math.isnan(value):
+                    raise self.loc.error("must be a number, got .nan", at)
+                if (cls, name) not in INFINITE_OK:
+                    raise self.loc.error(f"must be finite, got {raw!r}", at)
             check = FIELD_CHECKS.get((cls, name))
             # Checked as written (``-3``, not the converted ``-3.0``) so messages quote the file.
             problem = check(raw if type(raw) in (int, float) else value) if check else None

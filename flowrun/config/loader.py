@@ -13,6 +13,7 @@ import dataclasses
 import importlib
 import os
 import re
+import stat
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -32,6 +33,8 @@ _CONTROLLER_FIELDS = {
     "routing_controller": "routing",
 }
 _SECTIONS = "name, sim, env, network, vehicles, initial, traffic_lights, train"
+#: Largest config file read (flowrun's own are ~2 kB).
+MAX_CONFIG_BYTES = 1 << 20
 
 
 def load_config(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> ExperimentConfig:
@@ -50,21 +53,14 @@ def load_config(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> 
     """
     file = Path(path)
     source = str(path)
-    if file.is_dir():
-        raise ConfigError("is a directory; expected a YAML config file", "", source)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ConfigError(
-            f"config file not found (looked for {file.absolute()}); check the path", "", source
-        ) from None
-    except UnicodeDecodeError:
-        raise ConfigError("not a UTF-8 text file; expected a YAML config", "", source) from None
-    except OSError as err:
-        raise ConfigError(f"cannot read the config file: {err.strerror}", "", source) from None
-    data, locations = parse_yaml(text, source)
+    data, locations = parse_yaml(read_config_text(file, source), source)
     if data is None:
-        data = {}
+        raise ConfigError(
+            "the config file is empty (or only comments); a config needs at least a network "
+            "and vehicles (see configs/sugiyama.yaml)",
+            "",
+            source,
+        )
     if not isinstance(data, dict):
         raise locations.error(
             f"expected a mapping with the sections {_SECTIONS}; got a {type(data).__name__}", ()
@@ -73,6 +69,51 @@ def load_config(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> 
         data = {"name": file.stem, **data}
     apply_overrides(data, overrides, locations)
     return dataclasses.replace(_build(data, locations), source=source)
+
+
+def read_config_text(file: Path, source: str) -> str:
+    """The text of a config file, or one :class:`ConfigError` saying why it cannot be one.
+
+    Refused without reading: a missing path, a directory, anything but a regular file (a FIFO
+    would block, a device never end) and a file over :data:`MAX_CONFIG_BYTES`. Refused after
+    reading: bytes that are not UTF-8 (at the line of the first bad byte).
+    """
+    try:
+        info = file.stat()
+    except FileNotFoundError:
+        raise ConfigError(
+            f"config file not found (looked for {file.absolute()}); check the path", "", source
+        ) from None
+    except OSError as err:
+        raise ConfigError(f"cannot read the config file: {err.strerror}", "", source) from None
+    if stat.S_ISDIR(info.st_mode):
+        raise ConfigError("is a directory; expected a YAML config file", "", source)
+    if not stat.S_ISREG(info.st_mode):
+        raise ConfigError(
+            "is not a regular file (a FIFO, socket or device); expected a YAML config file",
+            "",
+            source,
+        )
+    if info.st_size > MAX_CONFIG_BYTES:
+        raise ConfigError(
+            f"is {info.st_size} bytes; a YAML config is a few kB (at most {MAX_CONFIG_BYTES}): "
+            "is this the right file?",
+            "",
+            source,
+        )
+    try:
+        raw = file.read_bytes()
+    except OSError as err:
+        raise ConfigError(f"cannot read the config file: {err.strerror}", "", source) from None
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        line = raw.count(b"\n", 0, err.start) + 1
+        raise ConfigError(
+            f"byte 0x{raw[err.start]:02x} is not UTF-8 text; save the config as UTF-8",
+            "",
+            f"{source}:{line}",
+        ) from None
 
 
 def config_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> ExperimentConfig:

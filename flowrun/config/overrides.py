@@ -1,6 +1,7 @@
 """``--set a.b.c=value`` overrides applied to the plain config data before it is checked.
 
-The value is a YAML scalar (or flow collection) read with ``yaml.safe_load``, never ``eval``.
+The value is a YAML scalar (or flow collection) read as the config file's values are
+(:func:`~flowrun.config.yamlio.load_scalar`: ``1:30`` stays text), never with ``eval``.
 An override may create a key that does not exist yet; the schema check that follows rejects an
 unknown one with a did-you-mean, located at ``--set``.
 """
@@ -13,7 +14,13 @@ from typing import Any
 
 import yaml
 
-from flowrun.config.yamlio import OVERRIDE_LOCATION, KeyPath, Locations, format_path
+from flowrun.config.yamlio import (
+    OVERRIDE_LOCATION,
+    KeyPath,
+    Locations,
+    format_path,
+    load_scalar,
+)
 from flowrun.errors import ConfigError
 
 _PART = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
@@ -53,7 +60,7 @@ def parse_override(text: str) -> tuple[KeyPath, Any]:
         )
     path = parse_key(key)
     try:
-        value = yaml.safe_load(raw)
+        value = load_scalar(raw)
     except yaml.YAMLError as err:
         raise ConfigError(
             f"cannot read the value '{raw}' as YAML: {err}", format_path(path), OVERRIDE_LOCATION

@@ -4,10 +4,18 @@ PyYAML's ``safe_load`` forgets where a value came from and silently keeps the la
 equal keys. Here the file is *composed* into PyYAML's node tree and walked by hand: scalars
 are built by PyYAML's own safe constructor (so ``.inf``, ``null``, ``yes`` mean what YAML says),
 every mapping key and list item records its line, and a repeated key is an error.
+
+Three YAML 1.1 surprises are changed to what YAML 1.2 (and a reader) expects: ``1:30`` is the
+text ``"1:30"``, not the sexagesimal number 90; ``1e-3`` is a number, not a string; and
+``2024-05-01`` is text, not a date.
+Hostile input is refused cheaply, as one :class:`ConfigError`: a document nested deeper than
+:data:`MAX_DEPTH` levels, or one whose aliases expand to more than :data:`MAX_VALUES` values
+(a "billion laughs" bomb), and characters YAML forbids (a NUL byte: a binary file).
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -20,6 +28,46 @@ PathPart = str | int
 KeyPath = tuple[PathPart, ...]
 
 OVERRIDE_LOCATION = "--set"
+
+#: Deepest nesting of mappings and lists a config may have (flowrun's own need a handful).
+MAX_DEPTH = 64
+#: Most values (scalars, mappings, lists; an alias counts each time it is used) in a document.
+MAX_VALUES = 200_000
+
+_TAG_INT = "tag:yaml.org,2002:int"
+_TAG_FLOAT = "tag:yaml.org,2002:float"
+_TAG_STR = "tag:yaml.org,2002:str"
+_TAG_TIMESTAMP = "tag:yaml.org,2002:timestamp"  # no setting is a date: ``2024-05-01`` is text
+# YAML 1.2 floats with an exponent but no dot or no exponent sign (``1e-3``, ``1.5e3``),
+# which YAML 1.1 reads as strings.
+_EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
+
+
+class ConfigLoader(yaml.SafeLoader):
+    """PyYAML's safe loader with YAML 1.2 numbers: no sexagesimal ``1:30``, ``1e5`` a float."""
+
+    def resolve(self, kind: Any, value: Any, implicit: Any) -> Any:
+        """The tag of a scalar: as PyYAML's, except for the two numbers above."""
+        tag = super().resolve(kind, value, implicit)
+        if kind is yaml.ScalarNode and implicit[0]:
+            if (tag in (_TAG_INT, _TAG_FLOAT) and ":" in value) or tag == _TAG_TIMESTAMP:
+                return _TAG_STR
+            if tag == _TAG_STR and _EXPONENT_FLOAT.match(value):
+                return _TAG_FLOAT
+        return tag
+
+
+def load_scalar(text: str) -> Any:
+    """One YAML value (an override's ``value``), read as a config file's values are.
+
+    Raises:
+        yaml.YAMLError: the text is not YAML.
+    """
+    loader = ConfigLoader(text)
+    try:
+        return loader.get_single_data()
+    finally:
+        loader.dispose()
 
 
 def format_path(path: Iterable[PathPart]) -> str:
@@ -74,11 +122,26 @@ class _Walker:
         self.loader = loader
         self.locations = locations
         self.open: set[int] = set()  # nodes being walked, to refuse a recursive alias
+        self.count = 0  # values built so far (an alias counts each time it is used)
 
     def line_of(self, node: yaml.Node) -> str:
         return f"{self.locations.source}:{node.start_mark.line + 1}"
 
     def value(self, node: yaml.Node, path: KeyPath) -> Any:
+        self.count += 1
+        if self.count > MAX_VALUES:
+            raise ConfigError(
+                f"more than {MAX_VALUES} values (aliases expanding into each other?); "
+                "a config is a few hundred values: write it out without nested aliases",
+                format_path(path),
+                self.line_of(node),
+            )
+        if len(path) > MAX_DEPTH:
+            raise ConfigError(
+                f"nested more than {MAX_DEPTH} levels deep; a config has a few levels",
+                format_path(path),
+                self.line_of(node),
+            )
         if isinstance(node, yaml.ScalarNode):
             return self.loader.construct_object(node, deep=True)
         if id(node) in self.open:
@@ -143,8 +206,9 @@ def parse_yaml(text: str, source: str) -> tuple[Any, Locations]:
         ConfigError: invalid YAML (at the line PyYAML reports) or a key given twice.
     """
     locations = Locations(source)
-    loader = yaml.SafeLoader(text)
+    loader: ConfigLoader | None = None
     try:
+        loader = ConfigLoader(text)  # the reader checks every character here
         node = loader.get_single_node()
         if node is None:
             return None, locations
@@ -157,10 +221,27 @@ def parse_yaml(text: str, source: str) -> tuple[Any, Locations]:
         if err.problem and err.context:
             what = f"{err.problem} ({err.context})"
         raise ConfigError(f"invalid YAML: {what}", "", where) from None
+    except yaml.reader.ReaderError as err:  # a NUL or another character YAML forbids
+        line = text.count("\n", 0, max(err.position, 0)) + 1
+        code = int(err.character) if isinstance(err.character, int) else ord(err.character)
+        what = "a NUL byte" if code == 0 else f"the character #x{code:04x}"
+        raise ConfigError(
+            f"contains {what}, which YAML does not allow: is this a binary file? "
+            "A config is a YAML text file",
+            "",
+            f"{source}:{line}",
+        ) from None
     except yaml.YAMLError as err:
         raise ConfigError(f"invalid YAML: {err}", "", source) from None
+    except RecursionError:  # PyYAML's composer recurses once per nesting level
+        raise ConfigError(
+            f"nested too deeply to read (more than {MAX_DEPTH} levels is never a config)",
+            "",
+            source,
+        ) from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 class _Dumper(yaml.SafeDumper):
