@@ -134,7 +134,7 @@ class RingNetwork(Network):
         if initial.bunching < 0:
             initial = replace(initial, bunching=0.0)
         lengths = [
-            g.car_following_params.length
+            g.car_following_params.length + g.car_following_params.min_gap  # + SUMO's minGap
             for g in self.vehicles.groups
             for _ in range(g.num_vehicles)
         ]
