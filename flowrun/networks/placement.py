@@ -19,7 +19,7 @@ from flowrun.suggest import did_you_mean
 def place_on_closed_road(
     length: float,
     lanes: int,
-    vehicle_lengths: list[float],
+    vehicle_space: list[float],
     initial: InitialConfig,
     rng: np.random.Generator,
 ) -> tuple[list[float], list[int]]:
@@ -27,20 +27,29 @@ def place_on_closed_road(
 
     ``uniform``: cars fill ``length - bunching`` metres evenly starting at ``x0``, cycling
     over ``min(lanes, lanes_distribution)`` lanes; each position then gets a Gaussian offset
-    of std ``perturbation``. ``random``: the free road is split at uniform random points.
+    of std ``perturbation``. ``random``: the free road is split at uniform random points, so
+    no two cars are closer than ``unit = max(vehicle_space) + min_gap`` front to front.
     ``shuffle`` permutes which vehicle takes which slot. All draws come from ``rng``.
+
+    ``initial.min_gap`` is Flow's: the extra bumper-to-bumper gap every placement keeps. With
+    ``uniform`` spacing it does not move the cars (Flow spreads them evenly whatever it is) but
+    the spacing must leave it, as in Flow, which refuses a ring where it does not.
 
     Args:
         length: road length, m.
         lanes: number of lanes.
-        vehicle_lengths: length of each vehicle, m, in placement order.
+        vehicle_space: each vehicle's length plus its SUMO ``minGap``, m, in placement order
+            (SUMO refuses to insert a car closer than that behind another).
         initial: the placement settings.
         rng: the seeded generator.
 
     Returns:
         positions (wrapped into ``[0, length)``) and lane indices.
+
+    Raises:
+        ConfigError: the cars do not fit with ``min_gap`` (key path ``min_gap``).
     """
-    n = len(vehicle_lengths)
+    n = len(vehicle_space)
     if n == 0:
         return [], []
     k = int(max(1, min(lanes, initial.lanes_distribution)))
@@ -48,8 +57,15 @@ def place_on_closed_road(
     available = length - initial.bunching
     slot = np.arange(n) // k
     lane = (np.arange(n) % k).astype(int)
+    unit = max(vehicle_space) + max(0.0, initial.min_gap)
+    if per_lane > 1 and available / per_lane < unit:
+        raise ConfigError(
+            f"{per_lane} vehicles per lane need {unit:.1f} m each (length + minGap + min_gap "
+            f"{initial.min_gap:g}) but the ring offers {available / per_lane:.1f} m per vehicle; "
+            "use a smaller min_gap, fewer vehicles or less bunching",
+            path="min_gap",
+        )
     if initial.spacing == "random":
-        unit = max(vehicle_lengths) + initial.min_gap
         free = max(available - per_lane * unit, 0.0)
         offsets = np.sort(rng.uniform(0.0, free, size=(k, per_lane)), axis=1)
         pos = initial.x0 + slot * unit + offsets[lane, slot]
