@@ -1,0 +1,282 @@
+"""``RingBatch``: B single-lane rings of one config, stepped together with numpy.
+
+Each ring keeps the random streams the SUMO backend's env would have after the same seed:
+its own episode generator (gymnasium's ``np_random``: ring length, placement, seeds) and its
+own controller-noise generator, whose draws are taken in the same order (group by group,
+step by step). Draws are made in blocks of :data:`NOISE_BLOCK` steps per ring, which gives
+the same numbers as drawing step by step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium.utils import seeding
+
+from flowrun.controllers.base import CarFollowingInputs
+from flowrun.fastring.physics import (
+    NUMERICAL_EPS,
+    BoolArray,
+    FloatArray,
+    IntArray,
+    commanded_speed,
+    flat_index,
+    noise_term,
+    ring_order,
+    sumo_driven_speed,
+    sumo_idm_follow_speed,
+)
+from flowrun.fastring.plan import RingPlan
+from flowrun.networks.base import Network
+
+#: simulation steps of controller noise drawn at once per ring
+NOISE_BLOCK = 512
+
+
+@dataclass
+class RingState:
+    """The moving state of ``B`` rings (arrays ``(N, B)`` unless noted).
+
+    Attributes:
+        start: entry position of every car, m. odo: distance driven, m. speed: m/s.
+        leader, follower: row of each car's leader / follower on its ring.
+        offset: headway offset (see :func:`~flowrun.fastring.physics.ring_order`), m.
+        headway: bumper-to-bumper gap to the leader now, m.
+        length: ring lengths, m, ``(B,)``.
+        steps: simulation steps since the episode started, ``(B,)``.
+    """
+
+    start: FloatArray
+    odo: FloatArray
+    speed: FloatArray
+    leader: IntArray
+    follower: IntArray
+    offset: FloatArray
+    headway: FloatArray
+    length: FloatArray
+    steps: IntArray
+
+    def __post_init__(self) -> None:
+        self.index()
+
+    def index(self) -> None:
+        """Refresh the flat leader/follower indices (after the columns changed)."""
+        self.lead_flat = flat_index(self.leader)
+        self.follow_flat = flat_index(self.follower)
+
+    @property
+    def unwrapped(self) -> FloatArray:
+        """Entry position + distance driven, m (never wrapped)."""
+        return self.start + self.odo
+
+    @property
+    def position(self) -> FloatArray:
+        """Ring position of every car, m (``get_x_by_id``)."""
+        return np.mod(self.unwrapped, self.length)
+
+    def take(self, cols: IntArray) -> RingState:
+        """The rings ``cols`` as a state of their own (copies)."""
+        return RingState(
+            self.start[:, cols], self.odo[:, cols], self.speed[:, cols], self.leader[:, cols],
+            self.follower[:, cols], self.offset[:, cols], self.headway[:, cols],
+            self.length[cols], self.steps[cols],
+        )  # fmt: skip
+
+    def put(self, cols: IntArray, part: RingState) -> None:
+        """Write ``part`` (a state of ``len(cols)`` rings) into the rings ``cols``."""
+        for name in ("start", "odo", "speed", "leader", "follower", "offset", "headway"):
+            getattr(self, name)[:, cols] = getattr(part, name)
+        self.length[cols] = part.length
+        self.steps[cols] = part.steps
+        self.index()
+
+
+class NoiseStreams:
+    """Each ring's controller-noise generator, drawn ahead in blocks (standard normals)."""
+
+    def __init__(self, num_draws: int, num_rings: int) -> None:
+        self.m = num_draws
+        self.b = num_rings
+        self.gens: list[np.random.Generator | None] = [None] * num_rings
+        self.buf = np.zeros((NOISE_BLOCK, num_draws, num_rings))
+        self.cursor = np.full(num_rings, NOISE_BLOCK, dtype=np.int64)
+        self._base = np.arange(num_draws)[:, None] * num_rings + np.arange(num_rings)
+
+    def restart(self, col: int, seed: int) -> None:
+        """Ring ``col`` starts a new episode with a generator seeded ``seed``."""
+        self.gens[col] = np.random.default_rng(seed)
+        self.cursor[col] = NOISE_BLOCK
+
+    def draw(self, cols: IntArray | None = None) -> FloatArray:
+        """One step of standard normals for the rings ``cols`` (all by default), ``(M, b)``."""
+        if self.m == 0:
+            n = self.b if cols is None else cols.size
+            return np.zeros((0, n))
+        cur = self.cursor if cols is None else self.cursor[cols]
+        if cur.max() >= NOISE_BLOCK:
+            spent = np.flatnonzero(self.cursor >= NOISE_BLOCK)
+            if cols is not None:
+                spent = np.intersect1d(spent, cols)
+            for j in spent.tolist():
+                gen = self.gens[j]
+                assert gen is not None, "restart() a ring before drawing its noise"
+                self.buf[:, :, j] = gen.standard_normal((NOISE_BLOCK, self.m))
+                self.cursor[j] = 0
+            cur = self.cursor if cols is None else self.cursor[cols]
+        base = self._base if cols is None else self._base[:, cols]
+        z = np.take(self.buf, base + cur * (self.m * self.b))
+        if cols is None:
+            self.cursor += 1
+        else:
+            self.cursor[cols] += 1
+        return z
+
+
+class RingPhysics:
+    """One simulation step of a :class:`RingState` under a :class:`RingPlan` (no randomness
+    of its own: noise comes in as standard normals)."""
+
+    def __init__(self, plan: RingPlan) -> None:
+        self.plan = plan
+        self._cache: dict[int, list[tuple[FloatArray, FloatArray, FloatArray]]] = {}
+        self.rl = plan.rl_rows
+        self.humans = [g for g in plan.groups if not g.is_rl]
+        capped = plan.safe_cap.copy()
+        capped[self.rl] = False
+        self.capped_humans = np.flatnonzero(capped)
+
+    def _limits(self, b: int) -> list[tuple[FloatArray, FloatArray, FloatArray]]:
+        """Per human group: max accel, max decel and lengths repeated for ``b`` rings."""
+        if b not in self._cache:
+            p = self.plan
+            self._cache[b] = [
+                (np.repeat(p.accel[g.start : g.stop], b), np.repeat(p.decel[g.start : g.stop], b),
+                 np.repeat(p.lengths[g.start : g.stop], b))
+                for g in self.humans
+            ]  # fmt: skip
+        return self._cache[b]
+
+    def safe_speed(self, s: RingState, rows: IntArray, leader_speed: FloatArray) -> FloatArray:
+        """SUMO's IDM follow speed of the cars ``rows`` (``(len(rows), B)``), m/s."""
+        p = self.plan
+        col = (slice(None), None)
+        return sumo_idm_follow_speed(
+            s.speed[rows], s.headway[rows], leader_speed[rows],
+            des_speed=p.des_speed[rows][col], accel=p.accel[rows][col],
+            decel=p.decel[rows][col], tau=p.tau[rows][col], min_gap=p.min_gap[rows][col],
+            dt=p.dt,
+        )  # fmt: skip
+
+    def step(self, s: RingState, z: FloatArray, rl_accel: FloatArray | None) -> BoolArray:
+        """Advance every ring one step; returns which rings SUMO would report a collision on.
+
+        Args:
+            s: the rings (updated in place).
+            z: standard normals of this step, ``(M, B)`` (see :class:`NoiseStreams`).
+            rl_accel: accelerations of the RL cars, ``(num_rl, B)``; ``None``: SUMO drives them.
+        """
+        p = self.plan
+        dt, limit = p.dt, p.speed_limit
+        b = s.length.size
+        v = s.speed
+        vl = np.take(v, s.lead_flat)
+        fh = np.take(s.headway, s.follow_flat)
+        fv = np.take(v, s.follow_flat)
+        nxt = np.empty_like(v)
+        limits = self._limits(b)
+        k = 0
+        time = float(s.steps[0]) * dt if b else 0.0
+        for g, (max_accel, max_decel, length) in zip(self.humans, limits, strict=True):
+            sl = slice(g.start, g.stop)
+            n = g.stop - g.start
+            inputs = CarFollowingInputs(
+                v[sl].reshape(-1), s.headway[sl].reshape(-1), vl[sl].reshape(-1),
+                fh[sl].reshape(-1), fv[sl].reshape(-1), np.full(n * b, limit), dt, time,
+                max_accel, max_decel, length,
+            )  # fmt: skip
+            acc = np.asarray(g.controller._accel(inputs), dtype=np.float64).reshape(n, b)
+            if g.controller.noise > 0:
+                acc = acc + noise_term(dt, g.controller.noise, z[k : k + n])
+                k += n
+            nxt[sl] = commanded_speed(v[sl], acc, dt, limit)
+        if self.capped_humans.size:
+            rows = self.capped_humans
+            nxt[rows] = np.minimum(nxt[rows], self.safe_speed(s, rows, vl))
+        rl = self.rl
+        if rl.size:
+            v_safe = self.safe_speed(s, rl, vl)
+            if rl_accel is None:
+                col = (slice(None), None)
+                nxt[rl] = sumo_driven_speed(
+                    v[rl], v_safe, accel=p.accel[rl][col], decel=p.decel[rl][col],
+                    emergency_decel=p.emergency_decel[rl][col],
+                    max_speed=p.max_speed[rl][col], lane_max=p.des_speed[rl][col], dt=dt,
+                )  # fmt: skip
+            else:
+                target = commanded_speed(v[rl], rl_accel, dt, limit)
+                cap = p.safe_cap[rl][:, None]
+                nxt[rl] = np.where(cap, np.minimum(target, v_safe), target)
+        s.speed = nxt
+        s.odo = s.odo + nxt * dt
+        u = s.start + s.odo
+        s.headway = np.take(u, s.lead_flat) - u + s.offset
+        s.steps = s.steps + 1
+        crashed = np.asarray((s.headway < -NUMERICAL_EPS).any(axis=0))
+        return crashed
+
+
+@dataclass
+class EpisodeStart:
+    """What a ring's episode generator decides at a reset (as the SUMO env draws it)."""
+
+    network: Network
+    start: FloatArray
+    speed: FloatArray
+    noise_seed: int
+
+
+def draw_episode(
+    plan: RingPlan, rng: np.random.Generator, cache: dict[int, Network]
+) -> EpisodeStart:
+    """Ring length, placement and the controller-noise seed, drawn from ``rng`` in the SUMO
+    env's order (``episode_network``, ``start_positions``, SUMO's seed, noise seed, routes)."""
+    network = plan.network
+    if plan.bounds is not None:
+        length = int(rng.integers(plan.bounds[0], plan.bounds[1] + 1))
+        if length not in cache:
+            cache[length] = plan.network.with_params(length=length)
+        network = cache[length]
+    placed = network.start_positions(rng)
+    starts = network.spec.edge_starts
+    start = np.array(
+        [starts[e] + lp for e, lp in zip(placed.edges, placed.lane_pos, strict=True)]
+    )
+    rng.integers(2**31 - 1)  # SUMO's own seed: nothing random in SUMO on this ring
+    noise_seed = int(rng.integers(2**63 - 1))
+    rng.integers(2**63 - 1)  # route choices: one route per edge on the ring
+    speed = np.array(
+        [g.initial_speed for g in plan.cfg.vehicles.groups for _ in range(g.num_vehicles)],
+        dtype=np.float64,
+    )
+    return EpisodeStart(network, start, speed, noise_seed)
+
+
+def fresh_state(plan: RingPlan, episodes: list[EpisodeStart]) -> RingState:
+    """The state at the start of the given episodes (one ring each, before the warm-up)."""
+    start = np.stack([e.start for e in episodes], axis=1)
+    length = np.array([e.network.spec.length for e in episodes], dtype=np.float64)
+    speed = np.stack([e.speed for e in episodes], axis=1)
+    leader, follower, offset = ring_order(start, plan.lengths, length)
+    headway = np.take(start, flat_index(leader)) - start + offset
+    b = len(episodes)
+    return RingState(
+        start, np.zeros_like(start), speed, leader, follower, offset, headway, length,
+        np.zeros(b, dtype=np.int64),
+    )  # fmt: skip
+
+
+def new_generator(seed: int | None) -> np.random.Generator:
+    """gymnasium's ``np_random`` for ``seed`` (as ``Env.reset(seed=...)`` makes it)."""
+    rng, _ = seeding.np_random(seed)
+    return rng
