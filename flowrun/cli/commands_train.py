@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import signal
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -24,9 +27,7 @@ from flowrun.cli.commands_run import (
     SeedOpt,
     SetOpt,
     console,
-    interrupt_between_steps,
     overrides_with_seed,
-    sigterm_as_interrupt,
 )
 from flowrun.cli.common import guarded
 
@@ -34,6 +35,55 @@ if TYPE_CHECKING:
     from flowrun.experiment.metrics import RunMetrics
 
 RunDirArg = Annotated[Path, typer.Argument(help="A train run folder.", show_default=False)]
+EvalOutOpt = Annotated[
+    Path | None,
+    typer.Option("--out", help="Folder for evaluation folders [default: RUN_DIR/eval]."),
+]
+
+
+class StopRequest:
+    """Ctrl-C/SIGTERM seen by :func:`stop_on_signals`: the first asks to stop at the next
+    step boundary (a checkpoint, finished logs), a second one stops at once."""
+
+    def __init__(self) -> None:
+        """No signal yet."""
+        self.signum: int | None = None
+
+    def __call__(self) -> bool:
+        """Whether a stop was asked."""
+        return self.signum is not None
+
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` once a stop was asked (call between steps)."""
+        if self.signum is not None:
+            raise KeyboardInterrupt
+
+    @property
+    def exit_code(self) -> int:
+        """128 + the signal: 130 for Ctrl-C (SIGINT), 143 for SIGTERM."""
+        return 128 + (self.signum if self.signum is not None else signal.SIGINT)
+
+
+@contextmanager
+def stop_on_signals() -> Iterator[StopRequest]:
+    """Turn SIGINT and SIGTERM into a :class:`StopRequest` (restored on exit).
+
+    Nothing is raised from inside the handler for the first signal: an exception there could
+    land anywhere (half a log chunk written, a pipe to an env process half read).
+    """
+    request = StopRequest()
+
+    def handler(signum: int, frame: Any) -> None:
+        if request.signum is not None:
+            raise KeyboardInterrupt
+        request.signum = signum
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield request
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
 
 
 def _progress_bar(*columns: Any) -> Progress:
@@ -56,7 +106,8 @@ def train(
     CONFIG is a YAML file or a Flow config module (a .py file defining flow_params; without
     a train: section it trains PPO with flowrun's defaults). With --resume, the run folder's
     saved config is used (plus --set, e.g. a larger train.total_timesteps) and training
-    continues from its last checkpoint.
+    continues from its last checkpoint, keeping the earlier monitor files, evaluations and
+    best model. Ctrl-C or SIGTERM saves a checkpoint and exits with 130 / 143.
     """
     from flowrun.config.flow_module import is_flow_module, load_any_config
     from flowrun.config.model import TrainConfig
@@ -82,7 +133,7 @@ def train(
     columns = (TextColumn("training"), BarColumn(), MofNCompleteColumn(),
                TextColumn("mean reward {task.fields[reward]}"), TimeElapsedColumn(),
                TimeRemainingColumn())
-    with _progress_bar(*columns) as bar, sigterm_as_interrupt():
+    with _progress_bar(*columns) as bar, stop_on_signals() as stop:
         task = bar.add_task("train", total=None, reward="-")
 
         def progress(done: int, total: int, reward: float | None) -> None:
@@ -91,15 +142,21 @@ def train(
 
         try:
             result = run_training(cfg, out=out, resume_dir=resume, progress=progress,
-                                  argv=sys.argv)
+                                  argv=sys.argv, should_stop=stop)
         except KeyboardInterrupt:
             console.print("[yellow]interrupted[/]: checkpoint saved; continue with --resume")
-            raise typer.Exit(code=130) from None
+            raise typer.Exit(code=stop.exit_code) from None
     resumed = f" (resumed at {result.resumed_from})" if result.resumed_from else ""
+    if result.status != "complete" or stop():
+        console.print(f"[yellow]interrupted[/] at {result.timesteps} steps: checkpoint saved; "
+                      f"continue with: flowrun train {config} --resume {result.run_dir}")
+        raise typer.Exit(code=stop.exit_code)
+    timing = result.timing
+    share = f", evaluation {timing.evaluation_share:.0%} of it" if timing is not None else ""
     console.print(f"trained to {result.timesteps} steps{resumed} in {result.wall_clock:.0f} s "
-                  f"({result.steps_per_second:.0f} steps/s); run folder: {result.run_dir}")
+                  f"({result.steps_per_second:.0f} steps/s{share}); run folder: {result.run_dir}")
     episodes = cfg.train.eval_episodes if cfg.train is not None else 1
-    _evaluate_and_show(result.run_dir, episodes, True, [], None, "best")
+    _evaluate_and_show(result.run_dir, episodes, True, [], None, "best", None)
 
 
 @guarded
@@ -117,12 +174,20 @@ def eval_(
     model: Annotated[
         str, typer.Option("--model", help="best (falls back to final) or final.")
     ] = "best",
+    seed: SeedOpt = None,
+    out: EvalOutOpt = None,
 ) -> None:
-    """Roll out a trained policy beside the all-human baseline of the same config."""
+    """Roll out a trained policy beside the all-human baseline of the same config.
+
+    Episode i of both resets with seed sim.seed + i (--seed S sets sim.seed). The evaluation
+    folder (config, metrics.json, MCAP logs) is RUN_DIR/eval/<timestamp>-<seed>/ or, with
+    --out DIR, DIR/<timestamp>-<seed>/. Ctrl-C or SIGTERM finishes the logs and exits 130 / 143.
+    """
     from flowrun.training.deps import require
 
     require("stable_baselines3")
-    _evaluate_and_show(run_dir, episodes, deterministic, list(set_ or []), config, model)
+    _evaluate_and_show(run_dir, episodes, deterministic, overrides_with_seed(set_, seed),
+                       config, model, out)
 
 
 def _evaluate_and_show(
@@ -132,26 +197,34 @@ def _evaluate_and_show(
     overrides: list[str],
     config: Path | None,
     model: str,
+    out: Path | None,
 ) -> None:
     from flowrun.training.evaluate import eval_config, evaluate
+    from flowrun.training.runstate import run_state
 
     horizon = eval_config(run_dir, overrides, config).env.horizon
+    state = run_state(run_dir)
+    if state != "complete":
+        what = {"running": "is still training", "cut": "was cut off (killed while training)",
+                "interrupted": "was interrupted", "failed": "failed"}[state]
+        console.print(f"[yellow]note[/]: {run_dir} {what}; evaluating its saved model anyway "
+                      f"(metrics.json records run_status: {state})")
     columns = (TextColumn("{task.fields[label]} episode {task.fields[episode]}"), BarColumn(),
                MofNCompleteColumn(), TimeRemainingColumn())
     # Stop at a step boundary so the MCAP log being written is finished cleanly.
-    with _progress_bar(*columns) as bar, interrupt_between_steps() as check:
+    with _progress_bar(*columns) as bar, stop_on_signals() as stop:
         task = bar.add_task("eval", total=int(horizon), label="policy", episode=0)
 
         def progress(label: str, episode: int, step: int) -> None:
             bar.update(task, completed=step, label=label, episode=episode)
-            check()
+            stop.check()
 
         try:
             result = evaluate(run_dir, episodes, deterministic, overrides, config, model,
-                              progress)
+                              progress, out)
         except KeyboardInterrupt:
             console.print("[yellow]interrupted[/]: evaluation logs finished")
-            raise typer.Exit(code=130) from None
+            raise typer.Exit(code=stop.exit_code) from None
     console.print(compare_table(f"{run_dir.name}: {result.model.name}, {episodes} episode(s)",
                                 result.policy, result.baseline))
     console.print(f"evaluation folder: {result.out_dir}")

@@ -1,4 +1,4 @@
-"""Training callbacks: progress reports and periodic checkpoints.
+"""Training callbacks: progress reports, stop requests and periodic checkpoints.
 
 Built lazily (:func:`make_callbacks`) so that importing this module needs no train extra.
 A checkpoint is ``checkpoints/model_<steps>.zip`` (+ ``vecnormalize_<steps>.pkl`` and, for
@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -20,9 +21,13 @@ if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.callbacks import BaseCallback
 
+    from flowrun.training.timing import TrainTiming
+
 # progress(timesteps_done, total_timesteps, mean_episode_reward or None)
 TrainProgress = Callable[[int, int, float | None], None]
 STATE_FILE = "state.json"
+# should_stop() -> True once the run was asked to stop (Ctrl-C, SIGTERM)
+StopRequested = Callable[[], bool]
 
 
 def mean_episode_reward(model: BaseAlgorithm) -> float | None:
@@ -40,7 +45,7 @@ def save_checkpoint(model: BaseAlgorithm, folder: Path, algorithm: str) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     steps = int(model.num_timesteps)
     path = folder / f"model_{steps}.zip"
-    model.save(path)
+    save_model(model, path)
     state: dict[str, Any] = {"timesteps": steps, "model": path.name, "vecnormalize": None}
     normalize = model.get_vec_normalize_env()
     if normalize is not None:
@@ -52,6 +57,13 @@ def save_checkpoint(model: BaseAlgorithm, folder: Path, algorithm: str) -> Path:
         state["replay_buffer"] = "replay_buffer.pkl"
     write_json(folder / STATE_FILE, state)
     return path
+
+
+def save_model(model: BaseAlgorithm, path: Path) -> None:
+    """``model.save`` to a temporary file, then renamed: a killed save leaves no broken zip."""
+    tmp = path.with_name(path.stem + ".tmp.zip")
+    model.save(tmp)
+    tmp.replace(path)
 
 
 def read_checkpoint_state(folder: Path) -> dict[str, Any] | None:
@@ -69,8 +81,13 @@ def make_callbacks(
     checkpoint_freq: int,
     progress: TrainProgress | None,
     total_timesteps: int,
+    should_stop: StopRequested | None = None,
+    timing: TrainTiming | None = None,
 ) -> list[BaseCallback]:
-    """The progress and checkpoint callbacks (frequencies in environment steps, all envs)."""
+    """The progress and checkpoint callbacks (frequencies in environment steps, all envs).
+
+    Learning stops at the next step once ``should_stop()`` is true.
+    """
     callbacks = require("stable_baselines3.common.callbacks")
 
     class ProgressCallback(callbacks.BaseCallback):  # type: ignore[name-defined]
@@ -79,7 +96,7 @@ def make_callbacks(
         def _on_step(self) -> bool:
             if progress is not None:
                 progress(int(self.num_timesteps), total_timesteps, mean_episode_reward(self.model))
-            return True
+            return should_stop is None or not should_stop()
 
     class CheckpointCallback(callbacks.BaseCallback):  # type: ignore[name-defined]
         """Saves a checkpoint each time another ``checkpoint_freq`` steps are done."""
@@ -89,47 +106,14 @@ def make_callbacks(
 
         def _on_step(self) -> bool:
             if checkpoint_freq > 0 and self.num_timesteps >= self.next_at:
+                start = time.perf_counter()
                 save_checkpoint(self.model, checkpoint_dir, algorithm)
+                if timing is not None:
+                    timing.checkpoints += time.perf_counter() - start
                 self.next_at = _next_multiple(int(self.num_timesteps), checkpoint_freq)
             return True
 
     return [ProgressCallback(), CheckpointCallback()]
-
-
-def make_eval_callback(
-    eval_env: Any,
-    best_dir: Path,
-    log_dir: Path,
-    eval_freq: int,
-    n_envs: int,
-    episodes: int,
-    best_stats: str,
-) -> BaseCallback:
-    """SB3's ``EvalCallback`` keeping ``best_model.zip``; ``eval_freq`` in env steps, all envs.
-
-    With ``VecNormalize``, the statistics the best model was evaluated with are saved beside
-    it as ``best_stats`` (they keep drifting afterwards).
-    """
-    callbacks = require("stable_baselines3.common.callbacks")
-
-    class SaveBestStats(callbacks.BaseCallback):  # type: ignore[name-defined]
-        def _on_step(self) -> bool:
-            normalize = self.model.get_vec_normalize_env()
-            if normalize is not None:
-                normalize.save(str(best_dir / best_stats))
-            return True
-
-    cb: BaseCallback = callbacks.EvalCallback(
-        eval_env,
-        n_eval_episodes=episodes,
-        eval_freq=max(1, math.ceil(eval_freq / n_envs)),
-        best_model_save_path=str(best_dir),
-        log_path=str(log_dir),
-        deterministic=True,
-        verbose=0,
-        callback_on_new_best=SaveBestStats(),
-    )
-    return cb
 
 
 def _next_multiple(done: int, every: int) -> int:

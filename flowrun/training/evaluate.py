@@ -8,6 +8,7 @@ is recorded to MCAP under ``<run>/eval/<timestamp>/``.
 from __future__ import annotations
 
 import pickle
+import zipfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime
@@ -52,6 +53,8 @@ class EvalResult:
         policy: one entry per policy episode.
         baseline: one entry per baseline episode (same seeds).
         logs: MCAP files written.
+        run_status: the training run's state (:func:`flowrun.training.runstate.run_state`):
+            anything but ``complete`` means the policy comes from an unfinished run.
     """
 
     out_dir: Path
@@ -59,6 +62,7 @@ class EvalResult:
     policy: list[RunMetrics]
     baseline: list[RunMetrics]
     logs: list[Path]
+    run_status: str = "complete"
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data for ``metrics.json``."""
@@ -69,6 +73,7 @@ class EvalResult:
             "policy_mean": mean_metrics(self.policy),
             "baseline_mean": mean_metrics(self.baseline),
             "logs": [p.name for p in self.logs],
+            "run_status": self.run_status,
         }
 
 
@@ -143,23 +148,35 @@ def evaluate(
     config_override: Path | None = None,
     model: str = "best",
     progress: EvalProgress | None = None,
+    out: Path | None = None,
 ) -> EvalResult:
     """Roll out the trained policy and the all-human baseline, ``episodes`` each.
 
-    Episode ``i`` of both resets with seed ``sim.seed + i``. Writes ``metrics.json`` and
-    the MCAP logs (``policy_<i>.mcap``, ``baseline_<i>.mcap``) to ``<run>/eval/<timestamp>/``.
+    Episode ``i`` of both resets with seed ``sim.seed + i``. Writes ``metrics.json`` (with
+    ``status``: ``running``, then ``complete`` or ``interrupted``) and the MCAP logs
+    (``policy_<i>.mcap``, ``baseline_<i>.mcap``) to ``<out>/<timestamp>-<seed>/``, ``out``
+    defaulting to ``<run>/eval``.
     """
+    from flowrun.training.runstate import run_state
+
     if episodes < 1:
         raise ConfigError(f"--episodes must be >= 1, got {episodes}")
     cfg = eval_config(run_dir, overrides, config_override)
     tc = train_section(cfg)
     path = model_path(run_dir, model)
-    policy = algorithm_class(tc.algorithm).load(path, device="cpu")
+    status = run_state(run_dir)
+    try:
+        policy = algorithm_class(tc.algorithm).load(path, device="cpu")
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as err:
+        raise TrainingError(f"cannot load {path}: {err}") from None
     stats = BEST_VECNORMALIZE if path.name == BEST_MODEL else VECNORMALIZE
     normalize = _load_normalize(run_dir / stats) if tc.normalize else None
-    out_dir = _eval_dir(run_dir)
-    (out_dir / "config.yaml").write_text(dump_config(cfg))
     seed = int(cfg.sim.seed or 0)
+    out_dir = _eval_dir(run_dir / "eval" if out is None else out, seed)
+    (out_dir / "config.yaml").write_text(dump_config(cfg))
+    head = {"seed": seed, "deterministic": deterministic, "model": str(path),
+            "run": str(run_dir), "run_status": status}
+    write_json(out_dir / "metrics.json", {"status": "running", **head})
     logs: list[Path] = []
 
     def act(obs: Any) -> Any:
@@ -167,23 +184,31 @@ def evaluate(
         action, _ = policy.predict(x, deterministic=deterministic)
         return action
 
-    rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
-    human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs, progress)
-    result = EvalResult(out_dir, path, rl, human, logs)
-    write_json(out_dir / "metrics.json", {"seed": seed, "deterministic": deterministic,
-                                          **result.to_dict()})
+    try:
+        rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
+        human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs,
+                         progress)
+    except KeyboardInterrupt:
+        write_json(out_dir / "metrics.json",
+                   {"status": "interrupted", **head, "logs": [p.name for p in logs]})
+        raise
+    result = EvalResult(out_dir, path, rl, human, logs, status)
+    write_json(out_dir / "metrics.json", {"status": "complete", **head, **result.to_dict()})
     return result
 
 
 def _load_normalize(path: Path) -> Any:
     if not path.is_file():
         raise TrainingError(f"train.normalize is on but {path} is missing")
-    with path.open("rb") as f:
-        return pickle.load(f)  # VecNormalize without its env: only the statistics are used
+    try:
+        with path.open("rb") as f:
+            return pickle.load(f)  # VecNormalize without its env: only the statistics are used
+    except (OSError, EOFError, pickle.UnpicklingError, AttributeError, ValueError) as err:
+        raise TrainingError(f"cannot read {path}: {err!r}") from None
 
 
-def _eval_dir(run_dir: Path) -> Path:
-    return unique_dir(run_dir / "eval" / datetime.now(UTC).strftime("%Y%m%d-%H%M%S"))
+def _eval_dir(parent: Path, seed: int) -> Path:
+    return unique_dir(parent / f"{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}-{seed}")
 
 
 def _rollout(

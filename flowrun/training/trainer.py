@@ -1,5 +1,7 @@
 """``train``: a config's ``train:`` section -> a run folder with models, logs and an evaluation.
 
+resume_config is re-exported from :mod:`flowrun.training.resume`.
+
 Run folder (``runs/<name>/<timestamp>-<seed>/``): ``config.yaml``, ``command.txt``,
 ``versions.json``, ``tensorboard/``, ``monitor/``, ``checkpoints/``, ``best_model.zip`` (when
 evaluating during training), ``final_model.zip`` (+ ``vecnormalize.pkl``), ``metrics.json`` and
@@ -9,28 +11,38 @@ the final evaluation under ``eval/``.
 from __future__ import annotations
 
 import logging
-import shlex
-import sys
-from collections.abc import Sequence
+import multiprocessing.forkserver
+import signal
+import threading
+import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from flowrun.config.dump import dump_config
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig, TrainConfig
 from flowrun.envs.factory import env_class
 from flowrun.errors import ConfigError, TrainingError
-from flowrun.experiment.rundir import create_run_dir, write_json
+from flowrun.experiment.rundir import create_run_dir
 from flowrun.training.algorithms import algorithm_class, build_hyperparams
 from flowrun.training.callbacks import (
+    StopRequested,
     TrainProgress,
     make_callbacks,
-    make_eval_callback,
-    read_checkpoint_state,
     save_checkpoint,
+    save_model,
 )
 from flowrun.training.deps import require
+from flowrun.training.periodic_eval import EpisodeRunner, make_periodic_eval_callback
+from flowrun.training.resume import (
+    keep_monitor_files,
+    note_resume,
+    resume_state,
+)
+from flowrun.training.resume import (
+    resume_config as resume_config,
+)
+from flowrun.training.runstate import RunLock, write_status
+from flowrun.training.timing import TrainTiming, timed_vec_env, timing_callback
 from flowrun.training.vecenv import make_vec_env, wrap_normalize
 
 if TYPE_CHECKING:
@@ -55,6 +67,7 @@ class TrainResult:
         wall_clock: seconds spent in this call's ``learn`` (evaluations during it included).
         status: ``complete`` or ``interrupted``.
         resumed_from: timesteps of the checkpoint this call started from (0 for a new run).
+        timing: where the time went.
     """
 
     run_dir: Path
@@ -62,6 +75,7 @@ class TrainResult:
     wall_clock: float
     status: str
     resumed_from: int = 0
+    timing: TrainTiming | None = None
 
     @property
     def steps_per_second(self) -> float:
@@ -93,6 +107,7 @@ def train(
     resume_dir: Path | None = None,
     progress: TrainProgress | None = None,
     argv: list[str] | None = None,
+    should_stop: StopRequested | None = None,
 ) -> TrainResult:
     """Train the config's policy with stable-baselines3 and write the run folder.
 
@@ -101,15 +116,20 @@ def train(
             config (:func:`resume_config`), possibly with a larger ``train.total_timesteps``.
         out: parent of new run folders.
         resume_dir: an earlier run folder to continue from its last checkpoint up to
-            ``train.total_timesteps`` (it keeps being written to).
+            ``train.total_timesteps`` (it keeps being written to; nothing is overwritten).
         progress: called with ``(timesteps done, total, mean episode reward)``.
         argv: the command line saved in ``command.txt``.
+        should_stop: polled at every step (and during evaluations); once true, training
+            stops, saves a checkpoint and returns with ``status == "interrupted"``.
 
-    A ``KeyboardInterrupt`` (Ctrl-C, or SIGTERM turned into one by the CLI) saves a checkpoint,
-    writes ``metrics.json`` with ``status: interrupted`` and propagates.
+    A ``KeyboardInterrupt`` also saves a checkpoint, writes ``metrics.json`` with
+    ``status: interrupted`` and propagates. While training, the folder is locked
+    (:class:`RunLock`): a second resume of it is refused.
+
+    Raises:
+        TrainingError: no checkpoint to resume from, the folder is in use, an env process died.
     """
-    import time
-
+    timing = TrainTiming()
     require("stable_baselines3")
     tc = train_section(cfg)
     seed = train_seed(cfg)
@@ -119,97 +139,127 @@ def train(
     env_class(cfg)  # a wrong env.class or missing additional_params, also before any work
     state: dict[str, Any] | None = None
     if resume_dir is not None:
-        state = _resume_state(resume_dir)
         run_dir = resume_dir
-        _note_resume(run_dir, cfg, state, argv)
+        state = resume_state(run_dir)
+        lock = RunLock(run_dir).acquire()
+        note_resume(run_dir, cfg, state, argv)
+        keep_monitor_files(run_dir, int(state["timesteps"]))
     else:
         run_dir = create_run_dir(out, cfg, seed, argv)
-    ckpt_dir = run_dir / "checkpoints"
-    venv = _training_env(cfg, tc, seed, run_dir, state)
-    eval_env: VecEnv | None = None
+        lock = RunLock(run_dir).acquire()
+    resumed_from = int((state or {}).get("timesteps", 0))
+    stop = should_stop or _never
+    status, done = "failed", resumed_from
+    venv: VecEnv | None = None
+    runner: EpisodeRunner | None = None
     model: BaseAlgorithm | None = None
-    start = time.monotonic()
-    status = "interrupted"
     try:
+        _write_train_metrics(run_dir, cfg, tc, seed, "running", done, timing, state)
+        _start_forkserver_shielded()
+        venv = _training_env(cfg, tc, seed, run_dir, state, timing)
         model = _model(cls, cfg, tc, venv, seed, run_dir, state)
         callbacks = make_callbacks(
-            tc.algorithm, ckpt_dir, tc.checkpoint_freq, progress, tc.total_timesteps
+            tc.algorithm, run_dir / "checkpoints", tc.checkpoint_freq, progress,
+            tc.total_timesteps, stop, timing,
         )
+        callbacks.append(timing_callback(timing))
         if tc.eval_freq > 0:
-            eval_env = _eval_env(cfg, tc, seed)
-            callbacks.append(
-                make_eval_callback(
-                    eval_env, run_dir, run_dir / "eval_log", tc.eval_freq, tc.n_envs,
-                    tc.eval_episodes, BEST_VECNORMALIZE,
-                )
-            )
-        remaining = tc.total_timesteps - int(model.num_timesteps)
-        if remaining > 0:
-            model.learn(
-                remaining,
-                callback=callbacks,
-                tb_log_name="run",
-                reset_num_timesteps=state is None,
-            )
-        status = "complete"
-        model.save(run_dir / FINAL_MODEL)
+            runner = _eval_runner(cfg, tc, seed, stop)
+            callbacks.append(make_periodic_eval_callback(
+                runner, run_dir, tc.eval_freq, BEST_MODEL, BEST_VECNORMALIZE, timing,
+            ))
+        status = _learn(model, tc, callbacks, state, stop)
+        done = int(model.num_timesteps)
+        finish = time.perf_counter()
+        _save_end(model, run_dir, tc, status)
+        timing.finish = time.perf_counter() - finish
+    except KeyboardInterrupt:
+        status = "interrupted"
+        _save_interrupted(model, run_dir, tc)
+        raise
+    except (EOFError, BrokenPipeError, ConnectionResetError) as err:
+        if not stop():
+            raise TrainingError(f"an environment process stopped unexpectedly ({err!r})") from err
+        status = "interrupted"  # the signal that stopped us also reached the env processes
+        _save_interrupted(model, run_dir, tc)
+    finally:
+        done = int(model.num_timesteps) if model is not None else done
+        _close(venv, runner)
+        timing.total = time.perf_counter() - timing.started
+        _write_train_metrics(run_dir, cfg, tc, seed, status, done, timing, state)
+        lock.release()
+    wall = timing.total - timing.startup
+    return TrainResult(run_dir, done, wall, status, resumed_from, timing)
+
+
+def _never() -> bool:
+    return False
+
+
+def _learn(
+    model: BaseAlgorithm,
+    tc: TrainConfig,
+    callbacks: list[Any],
+    state: dict[str, Any] | None,
+    stop: StopRequested,
+) -> str:
+    """Learn up to ``total_timesteps``; ``complete``, or ``interrupted`` when stopped."""
+    remaining = tc.total_timesteps - int(model.num_timesteps)
+    if remaining > 0 and not stop():
+        model.learn(
+            remaining, callback=callbacks, tb_log_name="run", reset_num_timesteps=state is None
+        )
+    return "interrupted" if stop() and model.num_timesteps < tc.total_timesteps else "complete"
+
+
+def _save_end(model: BaseAlgorithm, run_dir: Path, tc: TrainConfig, status: str) -> None:
+    """The checkpoint, and after a complete run the final model and its statistics."""
+    if status == "complete":
+        save_model(model, run_dir / FINAL_MODEL)
         normalize = model.get_vec_normalize_env()
         if normalize is not None:
             normalize.save(str(run_dir / VECNORMALIZE))
-        save_checkpoint(model, ckpt_dir, tc.algorithm)
-    except KeyboardInterrupt:
-        if model is not None:
-            path = save_checkpoint(model, ckpt_dir, tc.algorithm)
-            log.info("interrupted: checkpoint saved to %s", path)
-        raise
+    path = save_checkpoint(model, run_dir / "checkpoints", tc.algorithm)
+    log.info("%s: checkpoint saved to %s", status, path)
+
+
+def _save_interrupted(model: BaseAlgorithm | None, run_dir: Path, tc: TrainConfig) -> None:
+    if model is not None:
+        _save_end(model, run_dir, tc, "interrupted")
+
+
+def _start_forkserver_shielded() -> None:
+    """Start multiprocessing's fork server with SIGINT and SIGTERM ignored.
+
+    The env subprocesses are forked from it and inherit that, so Ctrl-C in a terminal (sent to
+    the whole process group) or ``kill -TERM`` of the group reaches only this process, which
+    stops at a step boundary and closes the envs itself. No-op when the fork server already
+    runs or outside the main thread.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    saved = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        multiprocessing.forkserver.ensure_running()
     finally:
-        wall = time.monotonic() - start
-        done = int(model.num_timesteps) if model is not None else 0
-        _close(venv, eval_env)
-        _write_train_metrics(run_dir, cfg, tc, seed, status, done, wall, state)
-    return TrainResult(run_dir, done, wall, status, int((state or {}).get("timesteps", 0)))
-
-
-def resume_config(run_dir: Path, overrides: Sequence[str] = ()) -> ExperimentConfig:
-    """A run folder's saved config with ``--set`` overrides (e.g. more ``total_timesteps``)."""
-    config = run_dir / "config.yaml"
-    if not config.is_file():
-        raise TrainingError(f"{run_dir} is not a run folder (no config.yaml); pass a train run")
-    return load_config(config, overrides)
-
-
-def _resume_state(run_dir: Path) -> dict[str, Any]:
-    state = read_checkpoint_state(run_dir / "checkpoints")
-    if state is None:
-        raise TrainingError(
-            f"{run_dir} has no checkpoint to resume from (no checkpoints/state.json); "
-            "set train.checkpoint_freq or start a new run"
-        )
-    return state
-
-
-def _note_resume(
-    run_dir: Path, cfg: ExperimentConfig, state: dict[str, Any], argv: list[str] | None
-) -> None:
-    """Append the command line; keep the earlier config if the resumed one differs."""
-    command = argv if argv is not None else sys.argv
-    with (run_dir / "command.txt").open("a") as f:
-        f.write(shlex.join(command) + "\n")
-    text = dump_config(cfg)
-    current = run_dir / "config.yaml"
-    if current.read_text() != text:
-        current.rename(run_dir / f"config.before_{state['timesteps']}.yaml")
-        current.write_text(text)
+        for s, handler in saved.items():
+            signal.signal(s, handler)
 
 
 def _training_env(
-    cfg: ExperimentConfig, tc: TrainConfig, seed: int, run_dir: Path, state: dict[str, Any] | None
+    cfg: ExperimentConfig,
+    tc: TrainConfig,
+    seed: int,
+    run_dir: Path,
+    state: dict[str, Any] | None,
+    timing: TrainTiming,
 ) -> VecEnv:
     monitor_dir = run_dir / "monitor"
     monitor_dir.mkdir(exist_ok=True)
     # Resumed runs reseed differently so they do not replay the first episodes.
     env_seed = seed if state is None else seed + int(state["timesteps"])
     venv = make_vec_env(cfg, tc.n_envs, env_seed, monitor_dir=monitor_dir, subprocess=True)
+    venv = timed_vec_env(venv, timing)
     if tc.normalize:
         stats = None
         if state is not None and state.get("vecnormalize"):
@@ -218,19 +268,17 @@ def _training_env(
     return venv
 
 
-def _eval_env(cfg: ExperimentConfig, tc: TrainConfig, seed: int) -> VecEnv:
-    """The env ``EvalCallback`` scores models on (picking ``best_model.zip``).
+def _eval_runner(
+    cfg: ExperimentConfig, tc: TrainConfig, seed: int, stop: StopRequested
+) -> EpisodeRunner:
+    """The episodes that pick ``best_model.zip``, run in this process.
 
-    Evaluation-mode rewards (Flow's ``env.evaluate``: the mean speed for the ring envs), and
+    Evaluation-mode rewards (Flow's ``env.evaluate``: the mean speed for the ring envs) and
     the same ``eval_episodes`` reset seeds at every evaluation, so scores are comparable.
-    SB3 resets once more after the last episode, hence one extra seed in the cycle.
     """
     eval_cfg = replace(cfg, env=replace(cfg.env, evaluate=True))
-    seeds = tuple(seed + 10_000 + i for i in range(tc.eval_episodes + 1))
-    env = make_vec_env(eval_cfg, 1, seed + 10_000, subprocess=True, cycle_seeds=seeds)
-    if tc.normalize:
-        env = wrap_normalize(env, None, training=False, gamma=_gamma(tc))
-    return env
+    seeds = [seed + 10_000 + i for i in range(tc.eval_episodes)]
+    return EpisodeRunner(eval_cfg, seeds, stop)
 
 
 def _gamma(tc: TrainConfig) -> float:
@@ -266,7 +314,7 @@ def _model(
     return model
 
 
-def _close(*envs: VecEnv | None) -> None:
+def _close(*envs: VecEnv | EpisodeRunner | None) -> None:
     for env in envs:
         if env is None:
             continue
@@ -283,22 +331,22 @@ def _write_train_metrics(
     seed: int,
     status: str,
     done: int,
-    wall: float,
+    timing: TrainTiming,
     state: dict[str, Any] | None,
 ) -> None:
-    write_json(
-        run_dir / "metrics.json",
-        {
-            "status": status,
-            "config": cfg.name,
-            "seed": seed,
-            "algorithm": tc.algorithm,
-            "n_envs": tc.n_envs,
-            "timesteps": done,
-            "total_timesteps": tc.total_timesteps,
-            "resumed_from": None if state is None else state["timesteps"],
-            "wall_clock_s": round(wall, 3),
-            "steps_per_s": round((done - (state or {}).get("timesteps", 0)) / wall, 1)
-            if wall > 0 else None,
-        },
+    resumed = int((state or {}).get("timesteps", 0))
+    learning = timing.total - timing.startup
+    write_status(
+        run_dir,
+        status,
+        config=cfg.name,
+        seed=seed,
+        algorithm=tc.algorithm,
+        n_envs=tc.n_envs,
+        timesteps=done,
+        total_timesteps=tc.total_timesteps,
+        resumed_from=None if state is None else resumed,
+        wall_clock_s=round(timing.total, 3),
+        steps_per_s=round((done - resumed) / learning, 1) if learning > 0 else None,
+        timing=timing.to_dict(),
     )

@@ -1,0 +1,118 @@
+"""A train run folder's state: a lock held while training, and the status in ``metrics.json``.
+
+``metrics.json`` says ``running`` from the start of training, then ``complete``,
+``interrupted`` (Ctrl-C/SIGTERM: a checkpoint was saved) or ``failed``. A run killed outright
+(SIGKILL, power loss) still says ``running`` but nobody holds its lock: :func:`run_state`
+reports it as ``cut``, so nothing mistakes it for a finished run.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import json
+import os
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from flowrun.errors import TrainingError
+from flowrun.experiment.rundir import write_json
+
+LOCK_FILE = ".train.lock"
+METRICS = "metrics.json"
+STATUSES = ("running", "complete", "interrupted", "failed")
+
+
+class RunLock:
+    """An exclusive lock on a run folder while a process trains into it (``flock``).
+
+    The operating system releases it when the process ends, however it ends, so a killed run
+    never leaves a stale lock.
+    """
+
+    def __init__(self, run_dir: Path) -> None:
+        """Prepare the lock of ``run_dir`` (taken by :meth:`acquire` or ``with``)."""
+        self.path = run_dir / LOCK_FILE
+        self._fd: int | None = None
+
+    def acquire(self) -> RunLock:
+        """Take the lock, or say who holds it.
+
+        Raises:
+            TrainingError: another process trains into this folder.
+        """
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
+            os.close(fd)
+            raise TrainingError(
+                f"{self.path.parent} is in use by another flowrun train (pid {holder}); "
+                "wait for it to finish or stop it (Ctrl-C) before resuming"
+            ) from None
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        self._fd = fd
+        return self
+
+    def release(self) -> None:
+        """Release the lock (idempotent)."""
+        if self._fd is not None:
+            fcntl.flock(self._fd, fcntl.LOCK_UN)
+            os.close(self._fd)
+            self._fd = None
+
+    def __enter__(self) -> RunLock:
+        """Acquire."""
+        return self.acquire()
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Release."""
+        self.release()
+
+
+def is_locked(run_dir: Path) -> bool:
+    """Whether a live process holds ``run_dir``'s training lock."""
+    path = run_dir / LOCK_FILE
+    if not path.is_file():
+        return False
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
+def read_metrics(run_dir: Path) -> dict[str, Any] | None:
+    """``metrics.json`` of a run folder (``None`` when missing or unreadable)."""
+    try:
+        data = json.loads((run_dir / METRICS).read_text())
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def write_status(run_dir: Path, status: str, **fields: Any) -> None:
+    """Write ``metrics.json`` with ``status`` and ``fields`` (atomically)."""
+    if status not in STATUSES:
+        raise ValueError(f"status must be one of {STATUSES}, got {status!r}")
+    write_json(run_dir / METRICS, {"status": status, **fields})
+
+
+def run_state(run_dir: Path) -> str:
+    """``complete``, ``interrupted``, ``failed``, ``running`` (a live process trains it) or
+    ``cut`` (killed while training, or no ``metrics.json`` at all)."""
+    metrics = read_metrics(run_dir)
+    status = None if metrics is None else metrics.get("status")
+    if status in ("complete", "interrupted", "failed"):
+        return str(status)
+    return "running" if is_locked(run_dir) else "cut"
