@@ -1,6 +1,8 @@
 """Environments: Flow's ``Env`` base on Gymnasium, the ring tasks and the merge."""
 
 from flowrun.envs.base import Env
+from flowrun.envs.bottleneck import BottleneckEnv
+from flowrun.envs.bottleneck_velocity import BottleneckDesiredVelocityEnv, DesiredVelocityEnv
 from flowrun.envs.merge import MergePOEnv
 from flowrun.envs.registry import env_names, register_envs, resolve_env_class
 from flowrun.envs.ring.accel import AccelEnv
@@ -17,6 +19,9 @@ register_envs()
 
 __all__ = [
     "AccelEnv",
+    "BottleneckDesiredVelocityEnv",
+    "BottleneckEnv",
+    "DesiredVelocityEnv",
     "Env",
     "LaneChangeAccelEnv",
     "MergePOEnv",

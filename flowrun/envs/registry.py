@@ -18,6 +18,7 @@ from flowrun.suggest import did_you_mean, unknown_name
 
 def _builtin() -> dict[str, type]:
     from flowrun.envs.bottleneck import BottleneckEnv
+    from flowrun.envs.bottleneck_velocity import BottleneckDesiredVelocityEnv
     from flowrun.envs.merge import MergePOEnv
     from flowrun.envs.ring.accel import AccelEnv
     from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
@@ -29,7 +30,8 @@ def _builtin() -> dict[str, type]:
         TrafficLightGridPOEnv,
     )
 
-    return {
+    aliases = {"DesiredVelocityEnv": BottleneckDesiredVelocityEnv}  # Flow's old name
+    return aliases | {
         c.__name__: c
         for c in (
             AccelEnv,
@@ -38,6 +40,7 @@ def _builtin() -> dict[str, type]:
             LaneChangeAccelEnv,
             MergePOEnv,
             BottleneckEnv,
+            BottleneckDesiredVelocityEnv,
             TestEnv,
             TrafficLightGridEnv,
             TrafficLightGridPOEnv,
@@ -48,7 +51,9 @@ def _builtin() -> dict[str, type]:
 
 #: envs that only make sense on their own network, with a config naming it (no default
 #: experiment to register with Gymnasium): the bottleneck's and the open highway's
-NEEDS_CONFIG = frozenset({"BottleneckEnv"})
+NEEDS_CONFIG = frozenset(
+    {"BottleneckEnv", "BottleneckDesiredVelocityEnv", "DesiredVelocityEnv"}
+)
 
 
 def env_names() -> list[str]:

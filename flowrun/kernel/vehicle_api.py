@@ -303,7 +303,10 @@ class FlowVehicleGetters:
         return rows
 
     def get_max_speed(self, veh_id: str) -> float:
-        """The vehicle type's maximum speed, m/s."""
+        """The vehicle's maximum speed, m/s: its type's, or the last ``set_max_speed``."""
+        chosen = self.__dict__.get("_max_speed_set", {}).get(veh_id)
+        if chosen is not None:
+            return float(chosen)
         return float(self.table.max_speeds[self.table.row(veh_id)])
 
     def get_route(self, veh_id: str) -> tuple[str, ...]:

@@ -3,6 +3,8 @@
 A mixin of :class:`~flowrun.kernel.vehicle.VehicleKernel`. Commands are kept in the kernel's
 arrays until :meth:`VehicleCommands.send_commands`, which ``k.simulation.simulation_step``
 calls right before SUMO's step (so Flow's ``apply_*; simulation_step(); update()`` works).
+Lane changes, SUMO's and commanded ones alike, are found by comparing each step's lanes
+with the step before (:class:`LaneChangeLog`).
 """
 
 from __future__ import annotations
@@ -19,19 +21,88 @@ if TYPE_CHECKING:
     from flowrun.kernel.lanes import LaneTable
     from flowrun.kernel.population import Population
     from flowrun.kernel.sumo import FastCalls
-    from flowrun.networks.base import Edge
+    from flowrun.networks.base import Edge, NetworkSpec
 
 _sum = np.add.reduce
 _consume = deque[object](maxlen=0).extend  # runs an iterator to its end, keeping nothing
 
 #: ``slowDown`` duration, s: shorter than a step, so the new speed holds at the next step.
 SLOW_DOWN_DURATION = 1e-3
+#: ``changeLane`` duration, s: Flow's, so a commanded car keeps its new lane
+LANE_CHANGE_HOLD = 100000.0
+#: Flow's value for "no such vehicle" (``get_last_lc`` of an unknown or non-RL car)
+ERROR = -1001.0
+
+
+class LaneChangeLog:
+    """Who changed lane when: each step's (edge, lane) of every car against the step before.
+
+    A car counts as changing lane when it is on the same edge as one step earlier, in
+    another lane (moving onto the next edge, where lane numbers may differ, is no change).
+    A lane change is stamped with the step after which it is first seen, counted from the
+    start of the episode as ``k.simulation.step_count`` and Flow's ``time_counter``. The
+    kernel keeps a log only once someone asks for it (lanes are then read every step).
+
+    Attributes:
+        step: the step of the last state looked at (-1 before the first).
+        last: vehicle id -> step of its last lane change.
+        changed: ids of the cars that changed lane in the last step.
+        total: lane changes since the episode started.
+    """
+
+    def __init__(self) -> None:
+        self.step = -1
+        self.last: dict[str, int] = {}
+        self.changed: list[str] = []
+        self.total = 0
+        self._seen: np.ndarray | None = None  # the lanes array of the last state looked at
+        self._ids: list[str] = []
+        self._edge = np.zeros(0, dtype=np.int64)
+        self._version = -1
+
+    def observe(
+        self, lanes: np.ndarray, edge: np.ndarray, ids: list[str], version: int, step: int
+    ) -> None:
+        """Look at one step's state (a state already looked at is skipped).
+
+        Args:
+            lanes: every car's lane index (the kernel's array of this step, never written).
+            edge: every car's edge as a number (same numbering every step).
+            ids: the cars' ids, in the rows of ``lanes``.
+            version: the population's version (rows unchanged while it is unchanged).
+            step: the step of this state since the episode started.
+        """
+        if lanes is self._seen:
+            return
+        self.step = step
+        prev_lanes, prev_edge, prev_ids = self._seen, self._edge, self._ids
+        same_rows = version == self._version
+        self._seen, self._edge, self._version = lanes, edge, version
+        if not same_rows:  # the population's list changes in place when cars come and go
+            self._ids = list(ids)
+        self.changed = []
+        if prev_lanes is None or not prev_ids or not ids:
+            return
+        if same_rows and prev_lanes.size == lanes.size:
+            rows = np.flatnonzero((edge == prev_edge) & (lanes != prev_lanes)).tolist()
+        else:
+            where = {vid: r for r, vid in enumerate(prev_ids)}
+            src = np.fromiter((where.get(v, -1) for v in ids), np.int64, len(ids))
+            kept = src >= 0
+            at = np.where(kept, src, 0)
+            moved = kept & (edge == prev_edge[at]) & (lanes != prev_lanes[at])
+            rows = np.flatnonzero(moved).tolist()
+        self.changed = [ids[r] for r in rows]
+        for vid in self.changed:
+            self.last[vid] = self.step
+        self.total += len(rows)
 
 
 class VehicleCommands:
     """Flow's ``apply_acceleration``, ``apply_lane_change`` and ``choose_routes``."""
 
     table: Population
+    spec: NetworkSpec
     api: Any
     dt: float
     ring_path: bool
@@ -50,6 +121,8 @@ class VehicleCommands:
     _route_of: dict[str, tuple[str, ...]]
     _lanes: LaneTable | None
     _edge_by_id: dict[str, Edge]
+    _multi_lane: bool
+    _lane_key: np.ndarray
 
     @property
     def edges(self) -> list[str]:  # implemented by the kernel
@@ -91,8 +164,71 @@ class VehicleCommands:
             if route is not None:
                 self._routes[self.table.row(vid)] = list(route)
 
+    # ------------------------------------------------------------------ lane changes
+    def lane_change_log(self) -> LaneChangeLog:
+        """The episode's :class:`LaneChangeLog`, brought up to the current step; lane
+        changes are logged from the first call on (an env that counts them calls this at
+        reset)."""
+        log: LaneChangeLog | None = self.__dict__.get("_lc_log")
+        if log is None:
+            log = self.__dict__["_lc_log"] = LaneChangeLog()
+        if self._multi_lane:
+            lanes = self.lanes
+            if self._lanes is not None:
+                edge = self._lanes.edge_index[self._lane_key]
+            else:  # a closed ring: lane numbers never change between edges
+                edge = np.zeros(lanes.size, dtype=np.int64)
+            # SUMO starts at 0 s and flowrun's insertion takes one step: the episode's
+            # step 0 is SUMO's time dt
+            step = round(float(self._fast.sim_time()) / self.dt) - 1
+            log.observe(lanes, edge, self.table.ids, self.table.version, step)
+        return log
+
+    def get_last_lc(self, veh_id: str, error: float = ERROR) -> float:
+        """Step of the RL car's last lane change (Flow's; ``-inf`` if it has not changed
+        lane this episode, ``error`` for an unknown or non-RL car, as Flow). Steps count
+        from the start of the episode, as ``env.time_counter``."""
+        table = self.table
+        if veh_id not in table or not table.is_rl[table.row(veh_id)]:
+            return error
+        return float(self.lane_change_log().last.get(veh_id, -math.inf))
+
+    def get_lane_changes(self) -> list[str]:
+        """Ids of the cars that changed lane in the last step (SUMO's or commanded)."""
+        return list(self.lane_change_log().changed)
+
+    @property
+    def num_lane_changes(self) -> int:
+        """Lane changes of all cars since the episode started."""
+        return self.lane_change_log().total
+
+    # ------------------------------------------------------------------ Flow's other commands
+    def set_max_speed(self, veh_id: str, max_speed: float) -> None:
+        """Set the car's maximum speed, m/s (SUMO's ``setMaxSpeed``, at once)."""
+        self.api.vehicle.setMaxSpeed(veh_id, float(max_speed))
+        self.__dict__.setdefault("_max_speed_set", {})[veh_id] = float(max_speed)
+
+    def add(self, veh_id: str, type_id: str, edge: str, pos: float | str,
+            lane: int | str, speed: float | str) -> None:  # fmt: skip
+        """Flow's ``k.vehicle.add``: insert a car of group ``type_id`` on ``edge`` now, on
+        the route of that edge (it joins the arrays when SUMO reports it departed).
+
+        Raises:
+            ValueError: no route starts on ``edge``.
+        """
+        from flowrun.networks.routes import route_name
+
+        if edge not in self.spec.routes and edge not in self.spec.route_choices:
+            raise ValueError(f"no route starts on edge {edge!r}; known: {sorted(self.spec.routes)}")
+        self.api.vehicle.add(
+            veh_id, route_name(edge), typeID=str(type_id), depart="now",
+            departLane=str(lane), departPos=str(pos), departSpeed=str(speed),
+        )  # fmt: skip
+
     def send_commands(self) -> None:
         """Send the buffered commands to SUMO and clear them."""
+        if self._multi_lane and "_lc_log" in self.__dict__:  # lanes before this step
+            self.lane_change_log()
         v = self.api.vehicle
         ids = self.table.ids
         cmd = self.accel_cmd
@@ -113,7 +249,7 @@ class VehicleCommands:
             lanes = self._num_lanes(self.edges[i])
             target_lane = min(max(int(self.lanes[i]) + d, 0), lanes - 1)
             if target_lane != self.lanes[i]:
-                v.changeLane(ids[i], target_lane, 100000.0)
+                v.changeLane(ids[i], target_lane, LANE_CHANGE_HOLD)
         for i, route in self._routes.items():
             v.setRoute(ids[i], route)
             if self.ring_path:
@@ -132,4 +268,3 @@ class VehicleCommands:
             return edge.lanes
         facts = None if self._lanes is None else self._lanes.edge_facts.get(edge_id)
         return 1 if facts is None else facts[0]
-
