@@ -3,19 +3,21 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterator
+import math
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, TypeVar
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
-from flowrun.cli.common import guarded
+from flowrun.cli.common import guarded, interrupted_exit, sigterm_as_interrupt
 from flowrun.errors import RecordingError
 from flowrun.recording import McapLog, McapRecorder, open_log, repair
+from flowrun.recording.atomic import new_file
 from flowrun.replay import (
     compare,
     layout_for,
@@ -35,6 +37,8 @@ from flowrun.replay import (
 from flowrun.replay.plots import plot_stride
 from flowrun.replay.signal_plots import plot_signals
 from flowrun.replay.signals import intersection_rows, signal_series
+
+T = TypeVar("T")
 
 
 class PlotKind(StrEnum):
@@ -80,16 +84,65 @@ def _export_foxglove(
     log: McapLog, out: Path, start: float | None, end: float | None, vehicles: list[str] | None
 ) -> int:
     """Copy the selected steps/vehicles into a new log (opens in Foxglove like any flowrun log)."""
-    if out.exists():
-        raise RecordingError(f"{out} exists; choose a new path for --foxglove")
     stats = {s.step: s for s in log.stats(start, end)}
     signals = {s.step: s for s in log.signals(start, end)}
     written = 0
-    with McapRecorder(out, metadata=log.metadata, attachments=log.attachments) as rec:
+    with (
+        new_file(out, "--foxglove") as tmp,
+        McapRecorder(tmp, metadata=log.metadata, attachments=log.attachments) as rec,
+    ):
         for frame in log.frames(start, end, vehicles):
             if frame.step in stats:
                 written += rec.write(frame, stats[frame.step], signals.get(frame.step))
     return written
+
+
+def _check_new(path: Path | None, option: str) -> None:
+    """Refuse an output that exists before any work is done (nothing is overwritten)."""
+    if path is not None and (path.exists() or path.is_symlink()):
+        raise RecordingError(
+            f"{option} {path} exists; choose a new path (flowrun never overwrites a file)"
+        )
+
+
+def _check_times(start: float | None, end: float | None) -> None:
+    for option, value in (("--from", start), ("--to", end)):
+        if value is not None and math.isnan(value):
+            raise RecordingError(f"{option} is NaN; give a simulation time in seconds")
+    if start is not None and end is not None and end < start:
+        raise RecordingError(f"--to ({end}) is before --from ({start})")
+
+
+def _repair(logs: list[Path]) -> None:
+    """``--repair IN OUT``: an interrupted repair leaves no file under OUT (exit 130/143)."""
+    if len(logs) != 2:
+        raise RecordingError(
+            f"--repair takes an input and an output log (IN OUT), got {len(logs)} path(s)"
+        )
+    src, dst = logs
+    _check_new(dst, "--repair output")
+    try:
+        with sigterm_as_interrupt():
+            report = repair(src, dst)
+    except KeyboardInterrupt as err:
+        raise interrupted_exit(
+            err, f"repair stopped; nothing was written to {dst} and {src} is unchanged"
+        ) from None
+    state = "damaged" if report.salvaged else "intact"
+    until = f" up to t={report.end_time:.1f} s" if report.end_time is not None else ""
+    typer.echo(
+        f"wrote {dst}: {report.frames} logged steps{until} from a {state} log "
+        f"({report.recovered_bytes} of {report.input_bytes} bytes usable)"
+    )
+
+
+def _interruptible(work: Callable[[], T], cleaned: str) -> T:
+    """Run an export; Ctrl-C/SIGTERM stop it (its partial file removed) with exit 130/143."""
+    try:
+        with sigterm_as_interrupt():
+            return work()
+    except KeyboardInterrupt as err:
+        raise interrupted_exit(err, f"export stopped; {cleaned}") from None
 
 
 def _intersection_table(log: McapLog, start: float | None, end: float | None) -> Table:
@@ -162,28 +215,15 @@ def register(app: typer.Typer) -> None:
         console = Console()
         with _warnings_to_stderr():
             if repair_:
-                if len(logs) != 2:
-                    raise RecordingError(
-                        f"--repair takes an input and an output log (IN OUT), got {len(logs)} "
-                        "path(s)"
-                    )
-                src, dst = logs
-                if dst.exists():
-                    raise RecordingError(f"{dst} exists; choose a new path for the repaired copy")
-                report = repair(src, dst)
-                state = "damaged" if report.salvaged else "intact"
-                until = f" up to t={report.end_time:.1f} s" if report.end_time is not None else ""
-                typer.echo(
-                    f"wrote {dst}: {report.frames} logged steps{until} from a {state} log "
-                    f"({report.recovered_bytes} of {report.input_bytes} bytes usable)"
-                )
+                _repair(logs)
                 return
             if not 1 <= len(logs) <= 2:
                 raise RecordingError(f"replay takes one log or two to compare, got {len(logs)}")
-            if start is not None and end is not None and end < start:
-                raise RecordingError(f"--to ({end}) is before --from ({start})")
+            _check_times(start, end)
             if len(logs) == 2 and (csv is not None or foxglove is not None):
                 raise RecordingError("--csv and --foxglove work on one log; drop the second log")
+            _check_new(csv, "--csv")
+            _check_new(foxglove, "--foxglove")
             chosen = _parse_vehicles(vehicles)
             edges = parse_route(route) if route is not None else None
             opened = [open_log(p) for p in logs]
@@ -226,10 +266,24 @@ def register(app: typer.Typer) -> None:
                     console.print(_intersection_table(lg, start, end))
 
             if csv is not None:
-                rows = to_csv(opened[0], csv, start_s=start, end_s=end, vehicles=chosen)
+                rows = _interruptible(
+                    lambda: to_csv(
+                        opened[0], csv, start_s=start, end_s=end, vehicles=chosen, overwrite=False
+                    ),
+                    f"nothing was written to {csv}",
+                )
                 typer.echo(f"wrote {csv} ({rows} rows)")
+                if opened[0].damage.data_lost:
+                    typer.secho(
+                        f"warning: {csv} lacks what the log lost: {opened[0].damage.short()}",
+                        err=True,
+                        fg=typer.colors.YELLOW,
+                    )
             if foxglove is not None:
-                n = _export_foxglove(opened[0], foxglove, start, end, chosen)
+                n = _interruptible(
+                    lambda: _export_foxglove(opened[0], foxglove, start, end, chosen),
+                    f"nothing was written to {foxglove}",
+                )
                 typer.echo(f"wrote {foxglove} ({n} logged steps)")
             if plot is not None:
                 folder = out if out is not None else logs[0].parent / "replay"

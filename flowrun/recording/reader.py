@@ -10,6 +10,7 @@ and :attr:`McapLog.damage` says what was lost (a warning is logged for each dama
 from __future__ import annotations
 
 import logging
+import math
 import os
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -23,7 +24,7 @@ from flowrun.recording.damage import DamageReport, Loss
 from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
 from flowrun.recording.mcap_file import OP_CHANNEL, OP_MESSAGE, OP_SCHEMA
 from flowrun.recording.signals import decode_signals
-from flowrun.recording.writer import METADATA_NAME, PROFILE, to_ns
+from flowrun.recording.writer import METADATA_NAME, PROFILE
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +37,19 @@ def _mib(n: int) -> str:
     if n < 2**20:
         return f"{n / 1024:.1f} KiB"
     return f"{n / 2**20:.1f} MiB"
+
+
+def _bound_ns(time_s: float | None, what: str) -> int | None:
+    """A time bound in s as ns, clamped to the range log times can have (-1 .. 2**64).
+
+    Raises:
+        RecordingError: the bound is NaN.
+    """
+    if time_s is None:
+        return None
+    if math.isnan(time_s):
+        raise RecordingError(f"the {what} time to read is NaN; give a number of seconds")
+    return round(max(-1.0, min(float(time_s) * 1e9, 2.0**64)))
 
 
 def _default_channels() -> tuple[dict[int, Schema], dict[int, Channel]]:
@@ -232,8 +246,7 @@ class McapLog:
         """Raw ``(schema, channel, message)`` triples in log-time order, ``start_s``-``end_s``
         inclusive, from the chunks that overlap the range. A damaged chunk is skipped (and
         added to :attr:`damage`); the others are read."""
-        start_ns = None if start_s is None else to_ns(start_s)
-        end_ns = None if end_s is None else to_ns(end_s)
+        start_ns, end_ns = _bound_ns(start_s, "start"), _bound_ns(end_s, "end")
         if start_ns is not None and end_ns is not None and end_ns < start_ns:
             return
         wanted = None if topics is None else set(topics)

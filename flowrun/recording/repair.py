@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flowrun.errors import RecordingError
+from flowrun.recording.atomic import new_file
 from flowrun.recording.mcap_file import McapWriter
 from flowrun.recording.reader import open_log
 from flowrun.recording.schema import VEHICLES_TOPIC
@@ -26,6 +27,7 @@ class RepairReport:
         messages: messages copied (all topics).
         frames: ``/flowrun/vehicles`` messages copied (logged steps).
         end_time: last simulation time copied, s (``None`` if nothing was copied).
+        damage: what the input lost, one line per damaged part (empty when intact).
     """
 
     in_path: Path
@@ -36,13 +38,19 @@ class RepairReport:
     messages: int
     frames: int
     end_time: float | None
+    damage: tuple[str, ...] = ()
 
 
 def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) -> RepairReport:
     """Copy everything readable in ``in_path`` into a new MCAP with summary and footer.
 
+    The copy is written to a ``.partial`` file beside ``out_path`` and renamed only when
+    complete: an interrupted repair leaves no file under ``out_path``, and the input is only
+    read.
+
     Raises:
-        RecordingError: the input is not a flowrun log, or ``out_path`` is the input.
+        RecordingError: the input is not a flowrun log, ``out_path`` exists (nothing is
+            overwritten) or cannot be written.
     """
     src, dst = Path(in_path), Path(out_path)
     if dst.exists() and dst.resolve() == src.resolve():
@@ -50,8 +58,7 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
     log = open_log(src)
     messages = frames = 0
     end_ns: int | None = None
-    dst.parent.mkdir(parents=True, exist_ok=True)
-    with open(dst, "wb") as stream:
+    with new_file(dst, "the repaired copy") as tmp, open(tmp, "wb") as stream:
         writer = McapWriter(
             stream, profile=PROFILE, library="flowrun-repair", chunk_size=CHUNK_SIZE
         )
@@ -84,6 +91,7 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
             frames += channel.topic == VEHICLES_TOPIC
             end_ns = message.log_time if end_ns is None else max(end_ns, message.log_time)
         writer.finish()
+        os.fsync(stream.fileno())
     return RepairReport(
         in_path=src,
         out_path=dst,
@@ -93,4 +101,5 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
         messages=messages,
         frames=frames,
         end_time=None if end_ns is None else end_ns / 1e9,
+        damage=tuple(log.damage.describe()),
     )

@@ -11,6 +11,7 @@ import numpy as np
 
 from flowrun.errors import RecordingError
 from flowrun.recording import McapLog
+from flowrun.recording.atomic import PARTIAL_SUFFIX, new_file
 
 CSV_COLUMNS = (
     "time",
@@ -50,6 +51,7 @@ def to_csv(
     start_s: float | None = None,
     end_s: float | None = None,
     vehicles: Iterable[str] | None = None,
+    overwrite: bool = True,
 ) -> int:
     """Write one row per vehicle per logged step; returns the number of rows.
 
@@ -58,15 +60,45 @@ def to_csv(
     leader); ``target_accel`` is the commanded acceleration (empty where SUMO drove the car);
     ``distance`` is the odometer and ``relative_position`` the position along the lane (m);
     ``road_grade`` is 0.
+
+    The rows go to a ``.partial`` file renamed to ``path`` when complete, so an interrupted
+    export never leaves a half CSV under ``path``.
+
+    Args:
+        log: an opened log.
+        path: the CSV file.
+        start_s: first simulation time to export, s.
+        end_s: last simulation time to export, s.
+        vehicles: only these vehicle ids.
+        overwrite: replace an existing ``path`` (``False``: refuse, as the CLI does).
+
+    Raises:
+        RecordingError: ``path`` exists and ``overwrite`` is false, or it cannot be written.
     """
     out = Path(path)
+    if overwrite and out.is_file():  # the library's old contract: replace it (atomically)
+        tmp = out.with_name(f".{out.name}.{os.getpid()}{PARTIAL_SUFFIX}")
+        try:
+            rows = _write_csv(log, tmp, start_s, end_s, vehicles)
+            os.replace(tmp, out)
+        except OSError as err:
+            raise RecordingError(f"cannot write CSV {out}: {err.strerror or err}") from None
+        finally:
+            tmp.unlink(missing_ok=True)
+        return rows
+    with new_file(out, "the CSV export") as tmp:
+        return _write_csv(log, tmp, start_s, end_s, vehicles)
+
+
+def _write_csv(
+    log: McapLog,
+    out: Path,
+    start_s: float | None,
+    end_s: float | None,
+    vehicles: Iterable[str] | None,
+) -> int:
     rows = 0
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        f = open(out, "w", newline="")  # noqa: SIM115 - closed below
-    except OSError as err:
-        raise RecordingError(f"cannot write CSV {out}: {err}") from err
-    with f:
+    with open(out, "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(CSV_COLUMNS)
         for frame in log.frames(start_s, end_s, vehicles):

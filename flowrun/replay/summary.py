@@ -47,6 +47,8 @@ class ReplaySummary:
         arrived: vehicles that left the network over the logged steps.
         outflow: ``arrived`` per hour of ``duration_s``, veh/h (``nan`` for an empty log).
         open_network: whether cars may enter and leave (not a ring): shows the three above.
+        damage: what the log lost, one line (``""`` when intact; see
+            :meth:`flowrun.recording.damage.DamageReport.short`).
     """
 
     name: str
@@ -73,6 +75,15 @@ class ReplaySummary:
     arrived: int = 0
     outflow: float = math.nan
     open_network: bool = False
+    damage: str = ""
+
+
+def _positive_int(text: str | None) -> int:
+    """A metadata count (``sims_per_step``, ``record_every``); 1 when absent or unreadable."""
+    try:
+        return max(int(text or 1), 1)
+    except ValueError:
+        return 1
 
 
 def run_label(log: McapLog) -> str:
@@ -125,8 +136,8 @@ def summarize(
     reward_sum = float(sum(rewards))
     finite_rewards = len(rewards)
     meta = log.metadata
-    sims_per_step = max(int(meta.get("sims_per_step", "1") or 1), 1)
-    record_every = max(int(meta.get("record_every", "1") or 1), 1)
+    sims_per_step = _positive_int(meta.get("sims_per_step"))
+    record_every = _positive_int(meta.get("record_every"))
     episode_return = reward_sum * record_every / sims_per_step if finite_rewards else None
     n = s.times.size
     first = float(s.times[0]) if n else math.nan
@@ -161,6 +172,7 @@ def summarize(
         arrived=arrived,
         outflow=arrived * 3600.0 / duration if duration > 0 else math.nan,
         open_network=meta.get("network_closed") == "false" or departed + arrived > 0,
+        damage=log.damage.short(),
     )
 
 
@@ -202,6 +214,8 @@ def summary_rows(s: ReplaySummary) -> dict[str, str]:
         rows["outflow"] = _num(s.outflow, " veh/h", 0)
     if s.salvaged:
         rows["salvaged"] = f"yes ({s.recovered_bytes} bytes recovered)"
+    if s.damage:
+        rows["damage"] = s.damage
     return rows
 
 
