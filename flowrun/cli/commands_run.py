@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 from typing import Annotated, Any
 
 import typer
@@ -100,6 +101,9 @@ def baseline(
     render: Annotated[
         bool, typer.Option("--render", help="Write run 0 as an animated GIF.")
     ] = False,
+    folder: Annotated[
+        Path | None, typer.Option("--folder", hidden=True, help="Exact run folder (sweeps).")
+    ] = None,
 ) -> None:
     """Run a non-RL experiment: N runs of the config's environment, a table, MCAP logs.
 
@@ -141,6 +145,7 @@ def baseline(
                     render=render,
                     argv=sys.argv,
                     progress=progress,
+                    folder=folder,
                 )
             except KeyboardInterrupt as err:
                 raise interrupted_exit(

@@ -22,9 +22,10 @@ app = typer.Typer(
 
 def _register_commands() -> None:
     # Each module adds its commands to ``app``; imported here so ``app`` exists first.
-    from flowrun.cli import commands_config, commands_run
+    from flowrun.cli import commands_config, commands_run, commands_sweep
 
     commands_run.register(app)
+    commands_sweep.register(app)
     commands_config.register(app)
     from flowrun.cli import commands_replay, commands_train
 
@@ -42,3 +43,7 @@ def main() -> None:
     except FlowrunError as err:  # commands use cli.common.guarded; this is the last resort
         typer.echo(f"error: {err}", err=True)
         sys.exit(1)
+
+
+if __name__ == "__main__":  # ``python -m flowrun.cli.main``: how ``flowrun sweep`` starts points
+    main()

@@ -139,6 +139,7 @@ def run_baseline(
     render: bool = False,
     argv: list[str] | None = None,
     progress: Callable[[int, int], None] | None = None,
+    folder: Path | None = None,
 ) -> BaselineResult:
     """Run the config's environment ``runs`` times and write the run folder.
 
@@ -148,6 +149,9 @@ def run_baseline(
     every run, so even a killed run leaves the runs it finished. Interrupted by
     Ctrl-C/SIGTERM, the current log is finished, ``metrics.json`` and ``status.json`` say
     ``interrupted``, and the ``KeyboardInterrupt`` propagates.
+
+    ``folder`` replaces ``out/<name>/<timestamp>-<seed>`` by that folder (``folder-1``, ...
+    if it exists), as a sweep names its points.
 
     Raises:
         ConfigError: bad ``runs``/``steps``/``record_every``, or a config that cannot run.
@@ -163,8 +167,8 @@ def run_baseline(
     # ``--steps`` is the episode length: the horizon follows it (and the saved config says so).
     cfg = replace(cfg, sim=replace(cfg.sim, seed=seed), env=replace(cfg.env, horizon=n_steps))
     env_class(cfg)  # a wrong env class or missing additional_params: fail before any file
-    check_out_dir(out)
-    run_dir = start_run(out, cfg, seed, argv)
+    check_out_dir(folder.parent if folder is not None else out)
+    run_dir = start_run(out, cfg, seed, argv, folder)
     with tracked_run(run_dir):
         return _run(cfg, run_dir, runs, n_steps, seed, record, record_every, render, progress)
     raise AssertionError("unreachable")  # pragma: no cover - tracked_run re-raises

@@ -182,15 +182,27 @@ def _safe_name(name: str) -> str:
 
 
 def create_run_dir(
-    out: Path, cfg: ExperimentConfig, seed: int, argv: list[str] | None = None
+    out: Path,
+    cfg: ExperimentConfig,
+    seed: int,
+    argv: list[str] | None = None,
+    folder: Path | None = None,
 ) -> Path:
     """Make a fresh run folder and write the resolved config, command line and versions.
+
+    Args:
+        out: the ``--out`` folder; the run folder is ``out/<cfg.name>/<timestamp>-<seed>``.
+        cfg: the resolved config.
+        seed: the run's seed.
+        argv: the command line (default ``sys.argv``).
+        folder: use this folder instead (``folder-1``, ... if taken), e.g. a sweep's point.
 
     Raises:
         ConfigError: ``cfg.name`` is not a plain folder name.
         FlowrunError: the folder cannot be created or written.
     """
-    run_dir = unique_dir(out / _safe_name(cfg.name) / run_dir_name(seed))
+    base = folder if folder is not None else out / _safe_name(cfg.name) / run_dir_name(seed)
+    run_dir = unique_dir(base)
     try:
         (run_dir / "config.yaml").write_text(dump_config(cfg))
         command = argv if argv is not None else sys.argv
@@ -203,10 +215,14 @@ def create_run_dir(
 
 
 def start_run(
-    out: Path, cfg: ExperimentConfig, seed: int, argv: list[str] | None = None
+    out: Path,
+    cfg: ExperimentConfig,
+    seed: int,
+    argv: list[str] | None = None,
+    folder: Path | None = None,
 ) -> Path:
     """:func:`create_run_dir`, then mark it ``running`` (with this process's pid and host)."""
-    run_dir = create_run_dir(out, cfg, seed, argv)
+    run_dir = create_run_dir(out, cfg, seed, argv, folder)
     try:
         mark_running(run_dir)
     except OSError as err:
@@ -363,6 +379,8 @@ def tracked_run(run_dir: Path, *, remove_if_empty: bool = True) -> Iterator[Path
 def _fail(run_dir: Path, message: str, remove_if_empty: bool) -> None:
     if remove_if_empty and not _has_results(run_dir):
         shutil.rmtree(run_dir, ignore_errors=True)
+        with suppress(OSError):  # and runs/<name>/ if this run was all it held
+            run_dir.parent.rmdir()
         return
     try:
         mark_done(run_dir, FAILED, error=message.splitlines()[0] if message else "", exit_code=1)

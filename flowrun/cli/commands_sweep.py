@@ -1,0 +1,282 @@
+"""``flowrun sweep``: a baseline per point of a grid of config values, in parallel processes.
+
+Each point runs as its own ``flowrun baseline`` process (libsumo runs one simulation per
+process), in its own session, so a Ctrl-C reaches the sweep only; the sweep then passes the
+signal on once to each running point, which finishes its log and labels its folder
+``interrupted``, and exits 130 (SIGINT) or 143 (SIGTERM). Finished points are kept; the same
+command again skips them.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import IO, Annotated, Any
+
+import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from flowrun.cli.commands_run import console
+from flowrun.cli.common import (
+    DEFAULT_OUT,
+    AnyConfigArg,
+    OutOpt,
+    SeedOpt,
+    SetOpt,
+    guarded,
+    interrupted_exit,
+    overrides_with_seed,
+)
+from flowrun.errors import ConfigError, FlowrunError
+from flowrun.experiment.rundir import Interrupted
+from flowrun.experiment.sweep import SweepPlan, SweepPoint
+
+#: Seconds between two looks at the running points.
+POLL_S = 0.1
+#: Seconds a point may take to finish its log after the signal before it is killed.
+STOP_GRACE_S = 60.0
+
+
+@contextmanager
+def _stop_requests() -> Iterator[list[int]]:
+    """Ctrl-C/SIGTERM are noted (the signal number) for the supervising loop to act on."""
+    received: list[int] = []
+
+    def handler(signum: int, frame: Any) -> None:
+        received.append(signum)
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield received
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+class _Job:
+    """One running point: its process and where its stderr goes."""
+
+    def __init__(self, point: SweepPoint, cmd: list[str]) -> None:
+        self.point = point
+        self.stderr: IO[bytes] = tempfile.TemporaryFile()  # noqa: SIM115 - closed in result()
+        self.proc = subprocess.Popen(
+            cmd,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=self.stderr,
+            start_new_session=True,  # a terminal's Ctrl-C reaches the sweep, not the points
+        )
+
+    def result(self) -> tuple[int, str]:
+        """Exit code and the last line of stderr (the point's one-line error)."""
+        code = self.proc.wait()
+        self.stderr.seek(0)
+        lines = self.stderr.read().decode(errors="replace").strip().splitlines()
+        self.stderr.close()
+        return code, lines[-1] if lines else ""
+
+
+def run_points(
+    commands: list[tuple[SweepPoint, list[str]]],
+    jobs: int,
+    on_done: Callable[[SweepPoint, int, str], None],
+) -> None:
+    """Run the commands, at most ``jobs`` at a time; ``on_done(point, exit code, last line)``.
+
+    Raises:
+        Interrupted: Ctrl-C/SIGTERM came; the running points got the signal and finished.
+    """
+    todo = list(commands)
+    running: list[_Job] = []
+    with _stop_requests() as stop:
+        while (todo or running) and not stop:
+            while todo and len(running) < jobs and not stop:
+                point, cmd = todo.pop(0)
+                running.append(_Job(point, cmd))
+            for job in [j for j in running if j.proc.poll() is not None]:
+                running.remove(job)
+                on_done(job.point, *job.result())
+            time.sleep(POLL_S)
+        if stop:
+            _stop(running, stop[0], on_done)
+            raise Interrupted(stop[0])
+
+
+def _stop(
+    running: list[_Job], signum: int, on_done: Callable[[SweepPoint, int, str], None]
+) -> None:
+    for job in running:
+        if job.proc.poll() is None:
+            job.proc.send_signal(signum)
+    deadline = time.monotonic() + STOP_GRACE_S
+    for job in running:
+        try:
+            job.proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            job.proc.kill()
+        on_done(job.point, *job.result())
+
+
+def point_command(
+    config: Path,
+    sets: list[str],
+    plan: SweepPlan,
+    point: SweepPoint,
+    out: Path,
+    run_args: list[str],
+) -> list[str]:
+    """The ``flowrun baseline`` command of one point."""
+    cmd = [sys.executable, "-m", "flowrun.cli.main", "baseline", str(config)]
+    for item in [*sets, *point.overrides]:
+        cmd += ["--set", item]
+    cmd += ["--seed", str(point.seed), "--out", str(out)]
+    return [*cmd, "--folder", str(plan.folder / point.label), *run_args]
+
+
+def _check_points(config: Path, sets: list[str], plan: SweepPlan, steps: int | None) -> None:
+    """Load every grid point's config (and its step count) before anything runs."""
+    from flowrun.config.flow_module import load_any_config
+    from flowrun.experiment.baseline import resolve_steps
+
+    seen: set[tuple[tuple[str, str], ...]] = set()
+    for point in plan.points:
+        if point.values in seen:
+            continue
+        seen.add(point.values)
+        try:
+            resolve_steps(load_any_config(config, [*sets, *point.overrides]), steps)
+        except ConfigError as err:
+            where = ", ".join(point.overrides)
+            raise ConfigError(f"with --grid {where}: {err}") from None
+
+
+def results_table(plan: SweepPlan, rows: list[dict[str, Any]], metric: str) -> Table:
+    """One row per point: swept values, seed, status, the metric and the mean speed."""
+    table = Table(title=f"sweep: {len(rows)} point(s), {plan.folder}")
+    keys = [a.key for a in plan.axes]
+    shown = [*keys, "seed", "status", metric] + (["mean_speed"] if metric != "mean_speed" else [])
+    for col in shown:
+        table.add_column(col, justify="right")
+    for row in rows:
+        cells = []
+        for col in shown:
+            value = row.get(col)
+            cells.append(f"{value:.4g}" if isinstance(value, float) else _text(value))
+        table.add_row(*cells)
+    return table
+
+
+@guarded
+def sweep(
+    config: AnyConfigArg,
+    grid: Annotated[
+        list[str],
+        typer.Option(
+            "--grid",
+            help="key.path=v1,v2,... : the values to sweep (YAML scalars). Several multiply.",
+        ),
+    ],
+    seeds: Annotated[int, typer.Option("--seeds", help="Seeds per grid point.")] = 1,
+    jobs: Annotated[
+        int | None, typer.Option("--jobs", help="Points run at once (default: CPU count).")
+    ] = None,
+    metric: Annotated[
+        str, typer.Option("--metric", help="Metric plotted against the first --grid key.")
+    ] = "mean_speed",
+    steps: Annotated[
+        int | None, typer.Option("--steps", help="Steps per run (default: env.horizon).")
+    ] = None,
+    runs: Annotated[int, typer.Option("--runs", help="Runs per point.")] = 1,
+    no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
+    seed: SeedOpt = None,
+    set_: SetOpt = None,
+    out: OutOpt = DEFAULT_OUT,
+) -> None:
+    """Run a baseline for every combination of --grid values (x --seeds), in parallel.
+
+    Each point gets its own run folder in the sweep folder (out/<name>/sweep-<id>/); then
+    results.csv, results.md and <metric>.png (the metric against the first --grid key, mean
+    and std over seeds). Interrupted, finished points are kept: the same command again runs
+    only the rest.
+    """
+    from flowrun.config.flow_module import load_any_config
+    from flowrun.experiment import sweep as sw
+    from flowrun.experiment.rundir import check_out_dir
+
+    axes = sw.parse_grid(grid)
+    sw.check_metric(metric, has_signals=True)
+    if jobs is not None and jobs < 1:
+        raise ConfigError(f"--jobs must be >= 1, got {jobs}")
+    if runs < 1:
+        raise ConfigError(f"--runs must be >= 1, got {runs}")
+    sets = list(set_ or [])
+    cfg = load_any_config(config, overrides_with_seed(sets, seed))
+    run_args = [*(["--steps", str(steps)] if steps is not None else []), "--runs", str(runs)]
+    run_args += ["--no-record"] if no_record else []
+    plan = sw.plan_sweep(cfg, axes, seeds, out, run_args)
+    _check_points(config, sets, plan, steps)
+    check_out_dir(out)
+    todo = [p for p in plan.points if sw.finished_folder(plan, p) is None]
+    try:
+        sw.write_plan(plan, sys.argv)
+    except OSError as err:
+        raise FlowrunError(f"cannot write sweep folder {plan.folder}: {err.strerror}") from None
+    skipped = len(plan.points) - len(todo)
+    if skipped:
+        console.print(f"{skipped} of {len(plan.points)} point(s) already done: skipped")
+    failures: list[str] = []
+    commands = [(p, point_command(config, sets, plan, p, out, run_args)) for p in todo]
+    columns = (TextColumn("sweep"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+               TextColumn("{task.fields[last]}"))  # fmt: skip
+    with Progress(*columns, console=console, transient=True,
+                  disable=not sys.stderr.isatty()) as bar:  # fmt: skip
+        task = bar.add_task("sweep", total=len(plan.points), completed=skipped, last="")
+
+        def on_done(point: SweepPoint, code: int, last: str) -> None:
+            if code != 0:
+                failures.append(f"{point.label}: exit {code}: {last}")
+            bar.update(task, advance=1, last=point.label)
+
+        try:
+            run_points(commands, jobs or os.cpu_count() or 1, on_done)
+        except KeyboardInterrupt as err:
+            _report(plan, metric)
+            raise interrupted_exit(
+                err, f"finished points kept in {plan.folder}; run the same command to go on"
+            ) from None
+    _report(plan, metric)
+    if failures:
+        for line in failures:
+            typer.secho(f"failed: {line}", err=True, fg=typer.colors.RED)
+        raise FlowrunError(f"{len(failures)} of {len(plan.points)} point(s) failed (above)")
+
+
+def _report(plan: SweepPlan, metric: str) -> None:
+    """Tables and plot of the finished points, printed and written to the sweep folder."""
+    from flowrun.experiment import sweep as sw
+
+    rows = sw.collect(plan)
+    try:
+        csv_path, md_path = sw.write_tables(plan, rows, metric)
+        plot = sw.plot_metric(plan, rows, metric)
+    except OSError as err:
+        raise FlowrunError(f"cannot write sweep results in {plan.folder}: {err.strerror}") from None
+    console.print(results_table(plan, rows, metric))
+    console.print(f"table: {csv_path} and {md_path.name}; plot: {plot.name}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``sweep`` to the app."""
+    app.command("sweep")(sweep)
+
+
+def _text(value: Any) -> str:
+    return "" if value is None else str(value)
