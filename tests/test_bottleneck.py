@@ -1,0 +1,191 @@
+"""Flow's bottleneck on real SUMO: the network netconvert builds, positions through the
+zipper merges, the capacity drop, and the bottleneck environments."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+from flowrun.config.loader import load_config, override_config
+from flowrun.config.params import InitialConfig, NetParams, VehicleParams
+from flowrun.envs import BottleneckDesiredVelocityEnv, BottleneckEnv, DesiredVelocityEnv
+from flowrun.envs.factory import make_env
+from flowrun.errors import ConfigError
+from flowrun.networks import BottleneckNetwork
+from flowrun.networks.bottleneck import bottleneck_edge_starts, zipper_link
+from flowrun.networks.build import build_network
+from flowrun.networks.registry import network_class
+from flowrun.scenarios import BottleneckScenario
+
+CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+
+
+@contextmanager
+def env_of(name: str, *overrides: str) -> Iterator[Any]:
+    env = make_env(load_config(CONFIGS / f"{name}.yaml", list(overrides)))
+    try:
+        yield env
+    finally:
+        env.close()
+
+
+def built(tmp_path: Path, scaling: int) -> tuple[BottleneckNetwork, ET.Element]:
+    net = BottleneckNetwork(
+        "b", VehicleParams(), NetParams(additional_params={"scaling": scaling}), InitialConfig()
+    )
+    return net, ET.parse(build_network(net.spec, tmp_path, "bottleneck")).getroot()
+
+
+@pytest.mark.parametrize("scaling", [1, 2])
+def test_lanes_drop_4s_2s_1s_through_zipper_merges(tmp_path: Path, scaling: int) -> None:
+    net, root = built(tmp_path, scaling)
+    edges = {e.get("id"): e.findall("lane") for e in root.iter("edge") if not e.get("function")}
+    assert {k: len(v) for k, v in edges.items()} == {
+        "1": 4 * scaling, "2": 4 * scaling, "3": 4 * scaling, "4": 2 * scaling, "5": scaling
+    }  # fmt: skip
+    lengths = {k: float(v[0].get("length", "nan")) for k, v in edges.items()}
+    assert lengths == pytest.approx({"1": 100, "2": 310, "3": 140, "4": 280, "5": 155})
+    kinds = {j.get("id"): j.get("type") for j in root.iter("junction")}
+    assert kinds["4"] == kinds["5"] == "zipper"
+    links = {(c.get("from"), c.get("fromLane"), c.get("to"), c.get("toLane"))
+             for c in root.iter("connection") if c.get("from") in ("3", "4")}  # fmt: skip
+    # Flow's toLane = floor(i / 2): two lanes merge into one, alternately
+    assert links == {("3", str(i), "4", str(i // 2)) for i in range(4 * scaling)} | {
+        ("4", str(i), "5", str(i // 2)) for i in range(2 * scaling)
+    }
+    assert net.spec.routes["1"] == ("1", "2", "3", "4", "5")
+    assert net.get_bottleneck_lanes(3) == [1, 0]
+    # the edge starts add the links SUMO built through the zippers, so positions run on
+    internal = {e.get("id"): float(e.find("lane").get("length", "nan"))  # type: ignore[union-attr]
+                for e in root.iter("edge") if e.get("function") == "internal"}  # fmt: skip
+    assert internal[":4_0"] == pytest.approx(zipper_link(4 * scaling), abs=1e-3)
+    assert internal[":5_0"] == pytest.approx(zipper_link(2 * scaling), abs=1e-3)
+    starts = net.spec.edge_starts
+    assert starts["4"] == pytest.approx(starts["3"] + 140 + internal[":4_0"], abs=1e-3)
+
+
+def test_flow_names_and_bad_parameters() -> None:
+    assert network_class("BottleneckScenario") is BottleneckNetwork is BottleneckScenario
+    assert DesiredVelocityEnv is BottleneckDesiredVelocityEnv
+    with pytest.raises(ConfigError, match="integer >= 1"):
+        BottleneckNetwork.resolve_params({"scaling": 1.5})
+    with pytest.raises(ConfigError, match="unknown parameter"):
+        BottleneckNetwork.resolve_params({"scalling": 2})
+    assert bottleneck_edge_starts((0.1, 0.1, 40.0, 40.0))["5"] == pytest.approx(
+        100 + 310 + 140 + 280 + 80.2
+    )
+
+
+def outflow(inflow: float, seconds: float = 400.0, window: float = 200.0) -> float:
+    """Outflow (veh/h) over the last ``window`` s of an all-human run of ``seconds``."""
+    cfg = load_config(CONFIGS / "bottleneck.yaml", [f"network.inflows.0.vehs_per_hour={inflow}"])
+    steps = round(seconds / cfg.sim.sim_step)
+    env = make_env(override_config(cfg, [f"env.horizon={steps}"]))
+    try:
+        env.reset(seed=0)
+        arrived = 0
+        for step in range(steps):
+            env.step(None)
+            if step >= steps - round(window / cfg.sim.sim_step):
+                arrived += len(env.k.vehicle.get_arrived_ids())
+    finally:
+        env.close()
+    return arrived * 3600.0 / window
+
+
+def test_outflow_rises_with_inflow_then_drops_past_capacity() -> None:
+    low, near, over = outflow(1000), outflow(1800), outflow(3000)
+    assert low == pytest.approx(1000, rel=0.05)  # below capacity all cars pass
+    assert near == pytest.approx(1800, rel=0.05)
+    assert over < near - 200  # the merges break down: less passes than at 1,800 veh/h
+
+
+def test_positions_grow_along_the_road_through_the_zippers() -> None:
+    with env_of("bottleneck", "env.horizon=300", "network.inflows.0.vehs_per_hour=600") as env:
+        env.reset(seed=0)
+        vk = env.k.vehicle
+        track: dict[str, list[tuple[float, float, str]]] = {}
+        for _ in range(300):
+            env.step(None)
+            for vid in vk.get_ids():
+                track.setdefault(vid, []).append(
+                    (vk.get_x_by_id(vid), vk.get_distance(vid), vk.get_edge(vid))
+                )
+        full = [t for t in track.values() if {e for _, _, e in t} >= {"3", ":4_0", "4", "5"}]
+        assert full, "no car drove through both merges"
+        for t in full:
+            x, odo = np.array([p[0] for p in t]), np.array([p[1] for p in t])
+            # the position moves as far as the car drives, across edges and junctions
+            assert np.diff(x) == pytest.approx(np.diff(odo), abs=0.05)
+
+
+def test_humans_change_lanes_only_under_a_mode_that_lets_them() -> None:
+    counts = {}
+    for mode in ("sumo_default", "no_lc_safe"):
+        with env_of("bottleneck", "env.horizon=300",
+                    f"vehicles.0.lane_change.lane_change_mode={mode}") as env:  # fmt: skip
+            env.reset(seed=0)
+            vk = env.k.vehicle
+            vk.lane_change_log()
+            seen, before = 0, {v: (vk.get_edge(v), vk.get_lane(v)) for v in vk.get_ids()}
+            for _ in range(300):
+                env.step(None)
+                now = {v: (vk.get_edge(v), vk.get_lane(v)) for v in vk.get_ids()}
+                changed = {v for v, place in now.items()
+                           if v in before and before[v][0] == place[0] != ""
+                           and before[v][1] != place[1]}  # fmt: skip
+                assert set(vk.get_lane_changes()) == changed
+                seen += len(changed)
+                before = now
+            assert vk.num_lane_changes == seen
+            counts[mode] = seen
+    assert counts["sumo_default"] > 20
+    assert counts["no_lc_safe"] == 0
+
+
+def test_bottleneck_env_rewards_the_outflow() -> None:
+    with env_of("bottleneck", "env.horizon=400", "network.inflows.0.vehs_per_hour=1800") as env:
+        assert isinstance(env, BottleneckEnv)
+        env.reset(seed=0)
+        rewards = [env.step(None)[1] for _ in range(400)]
+        # reward = outflow over the last 5 s / 2000: once cars arrive, about 1800 / 2000
+        assert np.mean(rewards[200:]) == pytest.approx(0.9, abs=0.1)
+        assert np.mean(rewards[:50]) == 0.0  # nobody has reached the end yet
+
+
+def test_bottleneck_env_refuses_flows_toll_booth() -> None:
+    with (
+        pytest.raises(ConfigError, match="toll booth"),
+        env_of("bottleneck", "env.additional_params.disable_tb=false"),
+    ):
+        pass
+
+
+def test_desired_velocity_env_is_flows_bottleneck0() -> None:
+    with env_of("bottleneck_desired_velocity", "env.horizon=120") as env:
+        assert env.observation_space.shape == (141,)
+        assert env.action_space.shape == (20,)
+        check_env(env, skip_render_check=True)
+        obs, _ = env.reset(seed=3)
+        vk = env.k.vehicle
+        slow = np.full(20, env.action_space.low[0])  # every cap down by max_decel * dt
+        caps: dict[str, float] = {}
+        for _ in range(120):
+            obs = env.step(slow)[0]
+            for rl in vk.get_rl_ids():
+                edge = vk.get_edge(rl)
+                assert vk.get_max_speed(rl) == pytest.approx(vk.api.vehicle.getMaxSpeed(rl))
+                if edge in ("2", "3", "4"):
+                    caps[rl] = vk.get_max_speed(rl)
+        assert obs.shape == (141,) and obs.min() >= 0.0 and obs.max() <= 1.0
+        assert caps and min(caps.values()) < 20.0  # the agent's cuts took effect
+        # humans per cell / 20 sum to the humans on the observed edges / 20
+        humans = sum(1 for v in vk.get_human_ids() if vk.get_edge(v) in ("1", "2", "3", "4", "5"))
+        assert obs[:35].sum() * 20 == pytest.approx(humans)
