@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import logging
 import os
 import re
 import stat
@@ -19,10 +20,11 @@ from pathlib import Path
 from typing import Any
 
 from flowrun.config.convert import Converter
+from flowrun.config.experiment_checks import check_experiment, ignored_settings
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.overrides import apply_overrides, parse_key
 from flowrun.config.params import VehicleType
-from flowrun.config.yamlio import KeyPath, Locations, parse_yaml
+from flowrun.config.yamlio import KeyPath, Locations, format_path, parse_yaml
 from flowrun.errors import ConfigError, FlowrunError
 from flowrun.suggest import did_you_mean
 
@@ -32,6 +34,7 @@ _CONTROLLER_FIELDS = {
     "lane_change_controller": "lane_change",
     "routing_controller": "routing",
 }
+log = logging.getLogger(__name__)
 _SECTIONS = "name, sim, env, network, vehicles, initial, traffic_lights, train"
 #: Largest config file read (flowrun's own are ~2 kB).
 MAX_CONFIG_BYTES = 1 << 20
@@ -142,6 +145,9 @@ def _build(data: dict[str, Any], loc: Locations) -> ExperimentConfig:
     _check_inflows(cfg, edges, loc)
     if network is not None:
         _check_traffic_lights(cfg, network, loc)
+    check_experiment(cfg, network, loc)
+    for path, why in ignored_settings(cfg):
+        log.warning("%s: %s %s", loc.of(path), format_path(path), why)
     return cfg
 
 
