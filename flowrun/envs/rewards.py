@@ -88,3 +88,39 @@ def power_demand(speeds: FloatArray, previous_speeds: FloatArray, dt: float) -> 
         + MASS * GRAVITY * C_ROLL * speeds
         + 0.5 * AIR_DENSITY * FRONT_AREA * C_DRAG * speeds**3
     )
+
+
+def wave_attenuation_rewards(
+    speeds: FloatArray, rl_actions: FloatArray, fail: npt.NDArray[np.bool_]
+) -> FloatArray:
+    """:func:`wave_attenuation_terms` summed, for many rings at once (the numpy backend).
+
+    Args:
+        speeds: speeds, m/s, shape ``(N, B)``: ``N`` cars on each of ``B`` rings.
+        rl_actions: the RL cars' (clipped) accelerations, m/s^2, shape ``(num_rl, B)``.
+        fail: whether each ring had a collision, ``(B,)``.
+
+    Returns:
+        ``4 * mean(v) / 20 - 4 * mean(|a|)`` per ring, 0 where ``fail``.
+    """
+    n = speeds.shape[0]
+    speed_term = 4.0 * (speeds.sum(axis=0) / n) / 20.0
+    if rl_actions.shape[0]:
+        mean_abs = np.abs(rl_actions).sum(axis=0) / rl_actions.shape[0]
+        reward = speed_term + np.where(mean_abs > 0, -4.0 * mean_abs, 0.0)
+    else:
+        reward = speed_term
+    bad = fail | (speeds.min(axis=0) < -100)
+    return np.where(bad, 0.0, reward)
+
+
+def desired_velocities(
+    speeds: FloatArray, target_velocity: float, fail: npt.NDArray[np.bool_]
+) -> FloatArray:
+    """:func:`desired_velocity` of many rings at once: speeds ``(N, B)`` -> ``(B,)``."""
+    n = speeds.shape[0]
+    max_cost = _target_norm(n, float(target_velocity))
+    diff = speeds - target_velocity
+    cost = np.sqrt(np.einsum("ij,ij->j", diff, diff))
+    reward = np.maximum(max_cost - cost, 0.0) / (max_cost + FLOAT32_EPS)
+    return np.where(fail | (n == 0), 0.0, reward)

@@ -1,4 +1,5 @@
-"""Parallel training environments: one SUMO per subprocess (libsumo runs one per process)."""
+"""Parallel training environments: one SUMO per subprocess (libsumo runs one per process),
+or, with ``sim.backend: numpy``, all the rings stepped together in this process."""
 
 from __future__ import annotations
 
@@ -73,8 +74,14 @@ def make_vec_env(
         subprocess: one subprocess per env (required for more than one env); ``False``
             builds a single env in this process.
         cycle_seeds: reset seeds each env uses in turn (for repeatable evaluations).
+
+    With ``sim.backend: numpy`` the ``n_envs`` rings run in this process as one
+    :class:`~flowrun.fastring.vec_env.RingVecEnv` (``subprocess`` does not apply) in a
+    ``VecMonitor``; a config the backend cannot run raises ``ConfigError`` here.
     """
     vec = require("stable_baselines3.common.vec_env")
+    if cfg.sim.backend == "numpy":
+        return _numpy_vec_env(cfg, n_envs, seed, monitor_dir, cycle_seeds)
     factories = [
         EnvFactory(
             cfg, None if monitor_dir is None else str(monitor_dir / f"env_{rank}"), cycle_seeds
@@ -87,6 +94,25 @@ def make_vec_env(
         if n_envs != 1:
             raise ValueError("more than one env needs subprocesses (libsumo: one SUMO a process)")
         venv = vec.DummyVecEnv(factories)
+    venv.seed(seed)
+    return venv
+
+
+def _numpy_vec_env(
+    cfg: ExperimentConfig,
+    n_envs: int,
+    seed: int,
+    monitor_dir: Path | None,
+    cycle_seeds: tuple[int, ...] | None,
+) -> VecEnv:
+    """The numpy backend's rings in a ``VecMonitor`` (one CSV for all rings)."""
+    from flowrun.fastring.plan import ring_plan
+    from flowrun.fastring.vec_env import RingVecEnv
+
+    vec = require("stable_baselines3.common.vec_env")
+    rings = RingVecEnv(ring_plan(cfg), n_envs, cycle_seeds)
+    filename = None if monitor_dir is None else str(monitor_dir / "rings")
+    venv: VecEnv = vec.VecMonitor(rings, filename=filename, info_keywords=("mean_speed",))
     venv.seed(seed)
     return venv
 

@@ -28,6 +28,17 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
 V_OBS_SCALE = 15.0  # m/s: speeds in the partial observation are divided by this
 
 
+def partial_observation(v_av: Any, v_lead: Any, gap: Any, max_length: float) -> np.ndarray:
+    """The AV's view in :class:`WaveAttenuationPOEnv`: ``[v_av/15, (v_lead - v_av)/15,
+    gap/max_length]`` (speeds in m/s, gap to the leader's front bumper and length in m).
+
+    Scalars give a vector of 3; arrays of ``B`` rings give ``(3, B)`` (the numpy backend).
+    """
+    return np.array(
+        [v_av / V_OBS_SCALE, (v_lead - v_av) / V_OBS_SCALE, gap / max_length]
+    )
+
+
 def ring_bounds(additional_params: dict[str, Any]) -> tuple[int, int] | None:
     """``(low, high)`` of the ring length drawn at each reset (m), or ``None`` to keep it.
 
@@ -119,10 +130,4 @@ class WaveAttenuationPOEnv(WaveAttenuationEnv):
         bounds = self.ring_range()
         max_length = float(bounds[1]) if bounds is not None else self.k.network.length()
         gap = (vk.get_x_by_id(lead) - vk.get_x_by_id(rl)) % self.k.network.length()
-        return np.array(
-            [
-                vk.get_speed(rl) / V_OBS_SCALE,
-                (vk.get_speed(lead) - vk.get_speed(rl)) / V_OBS_SCALE,
-                gap / max_length,
-            ]
-        )
+        return partial_observation(vk.get_speed(rl), vk.get_speed(lead), gap, max_length)
