@@ -163,6 +163,9 @@ class Experiment:
                 sink = sink_factory(run) if sink_factory else None
                 if hooks is not None:
                     hooks.on_reset(env)
+                # The state after reset goes to the log at once (the recorder flushes its first
+                # frame): a run killed before the first batch still leaves a readable log.
+                self._drain(sink, stats)
                 vehicles = max(env.k.vehicle.num_vehicles, 1)
                 drain_at = max(1, min(DRAIN_EVERY, DRAIN_VEHICLE_STEPS // vehicles))
                 for step in range(steps):
