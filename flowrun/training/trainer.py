@@ -13,7 +13,6 @@ from __future__ import annotations
 import logging
 import multiprocessing.forkserver
 import signal
-import threading
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -229,21 +228,20 @@ def _save_interrupted(model: BaseAlgorithm | None, run_dir: Path, tc: TrainConfi
 
 
 def _start_forkserver_shielded() -> None:
-    """Start multiprocessing's fork server with SIGINT and SIGTERM ignored.
+    """Start multiprocessing's fork server with SIGINT blocked.
 
-    The env subprocesses are forked from it and inherit that, so Ctrl-C in a terminal (sent to
-    the whole process group) or ``kill -TERM`` of the group reaches only this process, which
-    stops at a step boundary and closes the envs itself. No-op when the fork server already
-    runs or outside the main thread.
+    The env subprocesses are forked from it and inherit the blocked signal, so Ctrl-C in a
+    terminal (sent to the whole process group) reaches only this process, which stops at a
+    step boundary and closes the envs itself. A Ctrl-C meanwhile waits and is delivered here
+    afterwards. SIGTERM is left alone (``multiprocessing`` ends stray children with it); when
+    it reaches the envs too, training stops as interrupted all the same. No-op when the fork
+    server already runs.
     """
-    if threading.current_thread() is not threading.main_thread():
-        return
-    saved = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)}
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         multiprocessing.forkserver.ensure_running()
     finally:
-        for s, handler in saved.items():
-            signal.signal(s, handler)
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _training_env(
