@@ -10,7 +10,7 @@ import typer
 
 from flowrun.cli.common import guarded
 from flowrun.config import dump_config
-from flowrun.config.flow_module import load_any_config
+from flowrun.config.preflight import validate_config
 from flowrun.errors import ConfigError
 from flowrun.suggest import unknown_name
 
@@ -56,11 +56,16 @@ def register(app: typer.Typer) -> None:
             ),
         ] = None,
     ) -> None:
-        """Load and validate CONFIG, then print the resolved config (every setting) as YAML.
+        """Check CONFIG as baseline and train would, then print the resolved config as YAML.
 
         CONFIG is a YAML file or a Flow config module (a .py file defining flow_params).
+        Every problem a run would refuse is reported here first, as one line with the file,
+        line and key path, and exit code 1; nothing is written. Settings that would have no
+        effect are warned about. An import path (env.class: my_envs:MyEnv, a controller
+        type: pkg.mod:Class) is imported to check it, so its module's top-level code runs,
+        as it would in baseline/train.
         """
-        cfg = load_any_config(config, overrides or ())
+        cfg = validate_config(config, overrides or ())
         typer.echo(dump_config(cfg), nl=False)
 
     @app.command("list")

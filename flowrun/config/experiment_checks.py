@@ -57,12 +57,93 @@ def check_experiment(cfg: ExperimentConfig, network: Any, loc: Locations) -> Non
     Raises:
         ConfigError: the first problem, located.
     """
+    check_env_params(cfg.env.additional_params, {}, loc)
     _check_train_values(cfg, loc)
     if network is None:
         return
     _check_network_inputs(cfg, network, loc)
     _check_step(cfg, network, loc)
     _check_start(cfg, network, loc)
+
+
+#: Flow's environment parameters whose meaning is known whatever the env: must be > 0.
+POSITIVE_ENV_PARAMS = ("max_accel", "max_decel", "target_velocity", "switch_time",
+                       "lane_change_duration", "max_speed")  # fmt: skip
+#: ... integers >= 0.
+COUNT_ENV_PARAMS = ("num_rl", "num_observed", "num_local_edges", "num_local_lights")
+#: Largest number an environment parameter may be (beyond it spaces and rewards overflow).
+MAX_ENV_NUMBER = 1e9
+
+
+def check_env_params(params: dict[str, Any], declared: dict[str, Any], loc: Locations) -> None:
+    """Values of ``env.additional_params``: numbers finite and at most 1e9 in size (NaN or
+    1e308 make gymnasium spaces and rewards fail), Flow's well-known keys in range
+    (``max_accel > 0``, ``num_rl >= 0`` ...), and, where the env class ``declared`` a default
+    (its ``ADDITIONAL_ENV_PARAMS``), a value of the same kind (a number for a number, a
+    list of as many numbers for a list, true/false for a flag, text for text).
+
+    Raises:
+        ConfigError: at ``env.additional_params.<key>``.
+    """
+    base: KeyPath = ("env", "additional_params")
+    for key, value in params.items():
+        at = (*base, key)
+        _finite_numbers(value, at, loc)
+        if key in declared and declared[key] is not None:
+            _same_kind(value, declared[key], at, loc)
+        number = isinstance(value, int | float) and not isinstance(value, bool)
+        if key in POSITIVE_ENV_PARAMS and not (number and value > 0):
+            raise loc.error(f"expected a number > 0, got {value!r}", at)
+        if key in COUNT_ENV_PARAMS and (not isinstance(value, int) or isinstance(value, bool)
+                                        or value < 0):  # fmt: skip
+            raise loc.error(f"expected an integer >= 0, got {value!r}", at)
+        if key == "ring_length" and value is not None:
+            ok = isinstance(value, list) and len(value) == 2
+            ok = ok and all(isinstance(x, int | float) and not isinstance(x, bool) for x in value)
+            if not ok or not 0 < value[0] <= value[1]:
+                raise loc.error(
+                    f"expected [low, high] ring lengths in m with 0 < low <= high, got {value!r}",
+                    at,
+                )
+
+
+def _finite_numbers(value: Any, at: KeyPath, loc: Locations) -> None:
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if number and not abs(value) <= MAX_ENV_NUMBER:  # NaN fails the comparison too
+        raise loc.error(
+            f"expected a finite number between -{MAX_ENV_NUMBER:g} and {MAX_ENV_NUMBER:g}, "
+            f"got {value!r}",
+            at,
+        )
+    if isinstance(value, dict):
+        for key, item in value.items():
+            _finite_numbers(item, (*at, key), loc)
+    elif isinstance(value, list):
+        for i, item in enumerate(value):
+            _finite_numbers(item, (*at, i), loc)
+
+
+def _same_kind(value: Any, default: Any, at: KeyPath, loc: Locations) -> None:
+    def kind(x: Any) -> str:
+        if isinstance(x, bool):
+            return "true or false"
+        if isinstance(x, int | float):
+            return "a number"
+        if isinstance(x, str):
+            return "text"
+        if isinstance(x, list | tuple):
+            return "a list"
+        return "a mapping" if isinstance(x, dict) else type(x).__name__
+
+    if value is None:
+        return
+    if kind(value) != kind(default):
+        raise loc.error(f"expected {kind(default)} (default {default!r}), got {value!r}", at)
+    if isinstance(default, list | tuple) and default and len(value) != len(default):
+        raise loc.error(
+            f"expected a list of {len(default)} values (default {list(default)!r}), got {value!r}",
+            at,
+        )
 
 
 def _check_network_inputs(cfg: ExperimentConfig, network: Any, loc: Locations) -> None:

@@ -54,6 +54,13 @@ def load_config(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> 
     Raises:
         ConfigError: the first problem found, with its key path and ``file:line``.
     """
+    return load_config_located(path, overrides)[0]
+
+
+def load_config_located(
+    path: str | os.PathLike[str], overrides: Sequence[str] = ()
+) -> tuple[ExperimentConfig, Locations]:
+    """:func:`load_config`, also returning where each key stands (for later checks' errors)."""
     file = Path(path)
     source = str(path)
     data, locations = parse_yaml(read_config_text(file, source), source)
@@ -71,7 +78,7 @@ def load_config(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> 
     if "name" not in data:
         data = {"name": file.stem, **data}
     apply_overrides(data, overrides, locations)
-    return dataclasses.replace(_build(data, locations), source=source)
+    return dataclasses.replace(_build(data, locations), source=source), locations
 
 
 def read_config_text(file: Path, source: str) -> str:

@@ -1,0 +1,114 @@
+"""``flowrun validate``: everything ``baseline`` and ``train`` check before they start, located.
+
+:func:`load_config` checks the file, each value and what spans sections. Before a run,
+``baseline`` and ``train`` also resolve the environment class (importing a user's
+``module:Class``), check its ``ADDITIONAL_ENV_PARAMS`` and, for training, the
+hyper-parameter names against stable-baselines3's signatures. :func:`validate_config` runs
+those too, and reports each problem at the ``file:line`` of the key to change.
+
+Importing happens: an import path in ``env.class`` or in a controller's ``type`` runs that
+module's top-level code, exactly as ``baseline``/``train`` would; validate only what you would
+run.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from collections.abc import Sequence
+from typing import Any
+
+from flowrun.config.experiment_checks import check_env_params, optional, sub_path
+from flowrun.config.flow_module import is_flow_module, load_any_config
+from flowrun.config.loader import load_config_located
+from flowrun.config.model import ExperimentConfig
+from flowrun.config.params import is_rl
+from flowrun.config.yamlio import Locations
+from flowrun.errors import ConfigError, TrainingError
+
+#: Built-in environments whose actions drive RL vehicles (training needs at least one).
+RL_VEHICLE_ENVS = ("AccelEnv", "LaneChangeAccelEnv", "WaveAttenuationEnv",
+                   "WaveAttenuationPOEnv", "MergePOEnv", "MultiAgentAccelPOEnv",
+                   "MultiAgentWaveAttenuationPOEnv", "MultiAgentMergePOEnv",
+                   "MultiAgentHighwayPOEnv")  # fmt: skip
+
+
+def validate_config(
+    path: str | os.PathLike[str], overrides: Sequence[str] = ()
+) -> ExperimentConfig:
+    """Load a YAML config (or Flow config module) and run every check a run would.
+
+    Raises:
+        ConfigError: the first problem, at its ``file:line`` and key path.
+    """
+    if is_flow_module(path):
+        cfg = load_any_config(path, overrides)
+        locations = Locations(str(path))
+    else:
+        cfg, locations = load_config_located(path, overrides)
+    preflight(cfg, locations)
+    return cfg
+
+
+def preflight(cfg: ExperimentConfig, loc: Locations) -> None:
+    """The checks ``baseline``/``train`` make before creating a run folder (see module doc).
+
+    Raises:
+        ConfigError: located with ``loc``.
+    """
+    cls = _env_class(cfg, loc)
+    if cls is not None:
+        declared = dict(getattr(cls, "ADDITIONAL_ENV_PARAMS", {}) or {})
+        check_env_params(cfg.env.additional_params, declared, loc)
+    if cfg.train is not None:
+        _check_rl_vehicles(cfg, cls, loc)
+        _check_hyperparam_names(cfg, loc)
+
+
+def _relocated(err: ConfigError, loc: Locations) -> ConfigError:
+    return loc.error(err.message, sub_path(err.path)) if err.path else err
+
+
+def _env_class(cfg: ExperimentConfig, loc: Locations) -> Any:
+    find = optional("flowrun.envs.factory", "env_class")
+    if find is None:
+        return None
+    try:
+        return find(cfg)
+    except ConfigError as err:
+        raise _relocated(err, loc) from None
+
+
+def _check_rl_vehicles(cfg: ExperimentConfig, cls: Any, loc: Locations) -> None:
+    name = getattr(cls, "__name__", cfg.env.env_class or "AccelEnv")
+    builtin = getattr(cls, "__module__", "flowrun").startswith("flowrun")
+    if name not in RL_VEHICLE_ENVS or not builtin:
+        return
+    rl_groups = [g.veh_id for g in cfg.vehicles.groups if is_rl(g)]
+    inflows = cfg.network.net_params.inflows
+    rl_inflows = [f for f in (inflows.get() if inflows else []) if f.veh_type in rl_groups]
+    if cfg.vehicles.num_rl_vehicles == 0 and not rl_inflows:
+        at = ("env", "class") if cfg.env.env_class else ("train",)
+        raise loc.error(
+            f"{name} trains RL vehicles, but no vehicle group with "
+            "acceleration_controller RLController has a count > 0 (or an inflow); add one "
+            "(see configs/ring_wave.yaml) or use flowrun baseline",
+            at,
+        )
+
+
+def _check_hyperparam_names(cfg: ExperimentConfig, loc: Locations) -> None:
+    train = cfg.train
+    if train is None or train.backend != "sb3" or not train.hyperparams:
+        return
+    if importlib.util.find_spec("stable_baselines3") is None:
+        return  # train refuses to start without the extra anyway, saying how to install it
+    build = optional("flowrun.training.algorithms", "build_hyperparams")
+    if build is None:
+        return
+    try:
+        build(train.algorithm, train.hyperparams)
+    except ConfigError as err:
+        raise _relocated(err, loc) from None
+    except TrainingError:
+        return  # the algorithm's package (sb3-contrib) is missing: train says how to install it
