@@ -11,6 +11,9 @@ Modes:
     rec  ``exp`` plus an MCAP recorder (what ``flowrun baseline`` runs per step).
     merge  ``Experiment.run`` of ``configs/merge.yaml`` (Flow's merge0, an open network; one
          "step" here is one env step of two simulation steps).
+    merge_raw  the merge's floor, as ``bench/open_networks.py``'s (a): flowrun builds the files
+         and inserts the placed cars, then only ``simulationStep`` (two per "step") runs, and
+         each entering car gets its type's speed and lane-change modes.
 """
 
 from __future__ import annotations
@@ -36,6 +39,21 @@ def main() -> None:
     ring = Ring("", scale, steps, 0)  # scale 100: 2,200 cars on 23 km, as bench/ring.py
     if mode == "raw":
         time_floor(ring)  # SUMO's own IDM, many-lap routes, simulationStep only
+        return
+    if mode == "merge_raw":
+        merge = load_config(CONFIGS / "merge.yaml", [f"env.horizon={steps}"])
+        env = make_env(merge)
+        env.reset(seed=0)
+        assert env.k.process is not None
+        api = env.k.process.api
+        modes = {c.name: (c.speed_mode, c.lane_change_mode) for c in env.k.vehicle.table.classes}
+        for _ in range(steps * merge.env.sims_per_step):
+            api.simulationStep()
+            for vid in api.simulation.getDepartedIDList():
+                speed_mode, lane_change_mode = modes.get(api.vehicle.getTypeID(vid), (31, 1621))
+                api.vehicle.setSpeedMode(vid, speed_mode)
+                api.vehicle.setLaneChangeMode(vid, lane_change_mode)
+        env.close()
         return
     if mode == "merge":
         merge = load_config(CONFIGS / "merge.yaml", [f"env.horizon={steps}"])

@@ -129,33 +129,54 @@ class Population:
 
     def add(self, ids: Sequence[str], groups: Iterable[int]) -> None:
         """Vehicles that entered the network (appended in the given order)."""
-        if not ids:
-            return
-        new_slots, new_ids = [], []
-        for vid, g in zip(ids, groups, strict=True):
-            if vid in self._slot_of:
-                continue
-            slot = self._free.pop() if self._free else self._grow()
-            self._slot_of[vid] = slot
-            self._slot_group[slot] = g
-            new_slots.append(slot)
-            new_ids.append(vid)
-        self.ids = self.ids + new_ids  # a new list: frames queued earlier keep theirs
-        self.slots = np.concatenate((self.slots, np.array(new_slots, dtype=np.int64)))
-        self._refresh()
+        self.change((), ids, groups)
 
     def remove(self, ids: Iterable[str]) -> None:
         """Vehicles that left the network (unknown ids are ignored)."""
-        gone = [self._slot_of.pop(vid) for vid in ids if vid in self._slot_of]
-        if not gone:
-            return
-        self._free.extend(gone)
-        keep = self._row_of_slot[gone]
-        mask = np.ones(len(self.ids), dtype=bool)
-        mask[keep] = False
-        self.ids = list(compress(self.ids, mask.tolist()))
-        self.slots = self.slots[mask]
+        self.change(ids, (), ())
+
+    def change(
+        self, removed: Iterable[str], added: Sequence[str], groups: Iterable[int]
+    ) -> IntArray | None:
+        """Vehicles that left and vehicles that entered, in one update of the arrays.
+
+        Unknown ids in ``removed`` and known ids in ``added`` are ignored. The survivors
+        keep their order and the new vehicles are appended in the given order.
+
+        Returns:
+            for each row after the change, its row before (-1 for a vehicle that entered),
+            or ``None`` when nothing changed.
+        """
+        slot_of = self._slot_of
+        gone = [slot_of.pop(vid) for vid in removed if vid in slot_of]
+        new_slots: list[int] = []
+        new_ids: list[str] = []
+        for vid, g in zip(added, groups, strict=True):
+            if vid in slot_of:
+                continue
+            slot = self._free.pop() if self._free else self._grow()
+            slot_of[vid] = slot
+            self._slot_group[slot] = g
+            new_slots.append(slot)
+            new_ids.append(vid)
+        if not gone and not new_ids:
+            return None
+        n = len(self.ids)
+        if gone:
+            self._free.extend(gone)
+            mask = np.ones(n, dtype=bool)
+            mask[self._row_of_slot[gone]] = False
+            kept = np.flatnonzero(mask)
+            self.ids = list(compress(self.ids, mask.tolist()))  # a new list: frames keep theirs
+            old_slots = self.slots[kept]
+        else:
+            kept = np.arange(n)
+            self.ids = list(self.ids)
+            old_slots = self.slots
+        self.ids += new_ids
+        self.slots = np.concatenate((old_slots, np.array(new_slots, dtype=np.int64)))
         self._refresh()
+        return np.concatenate((kept, np.full(len(new_ids), -1, dtype=np.int64)))
 
     def _grow(self) -> int:
         slot = self._slot_group.size

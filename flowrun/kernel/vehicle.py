@@ -36,6 +36,10 @@ _FOLLOWING = frozenset(
     ("leader", "follower", "headway", "tailway", "leader_speed", "follower_speed",
      "follower_headway")
 )  # fmt: skip
+#: where each car is: read when first asked in a step on an open network (``_read_place``)
+_PLACE = frozenset(("_lane_key", "_lane_pos", "lanes", "position", "speed_limit", "on_internal"))
+_XY = frozenset(("x", "y"))
+_PLACE_AND_FOLLOWING = _FOLLOWING | _PLACE | _XY
 
 
 class VehicleKernel(VehicleCommands, FlowVehicleGetters):
@@ -65,6 +69,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         rng: np.random.Generator | None = None,
     ) -> None:
         self._pending = False  # the following arrays of this step are still to be found
+        self._place_pending = False  # lanes and positions of this step are still to be read
+        self._xy_pending = False  # map coordinates of this step are still to be read
         self.initial = initial
         self.table = Population(initial.classes)
         self.table.add(initial.ids, initial.group.tolist())
@@ -241,43 +247,69 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         return self._accel_real
 
     def _update_open(self, first: bool) -> np.ndarray:
-        """Any network: follow the population, read lanes and positions, find leaders."""
+        """Any network: follow the population, read speeds; where each car is (lane,
+        position, map coordinates) and who follows whom are read when first asked."""
         self._follow_population(first)
         self.prev_speed = self.speed
-        fast, lanes, pop = self._fast, self._lanes, self.table
-        assert lanes is not None and self._following_open is not None
+        fast, pop = self._fast, self.table
         ids = pop.ids
-        n = len(ids)
-        speed = np.fromiter(map(fast.get_speed, ids), np.float64, n)
+        speed = np.fromiter(map(fast.get_speed, ids), np.float64, len(ids))
         if self._new_rows.size:  # a car that just entered has no speed before: no acceleration
             self.prev_speed = self.prev_speed.copy()
             self.prev_speed[self._new_rows] = speed[self._new_rows]
             self._new_rows = _NO_ROWS
-        keys = lanes.keys(list(map(fast.get_lane_id, ids)))
-        lane_pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
         self._odometer = None  # read when someone asks (recording, get_distance)
-        if self.read_xy:
-            xy = np.array(list(_flatten(map(fast.get_position, ids))), dtype=np.float64)
-            self.x, self.y = xy[0::2], xy[1::2]
+        self._stale_edges = True
+        # A step nobody asks about (the first of two sims per env step with SUMO-driven
+        # humans) reads nothing more; the look-ahead of ContinuousRouter needs the lanes now.
+        self._pending = True
+        if self.LAZY_FOLLOWING and not pop.continuous.any():
+            d = self.__dict__
+            for name in _PLACE_AND_FOLLOWING if self.read_xy else _PLACE_AND_FOLLOWING - _XY:
+                d.pop(name, None)
+            self._place_pending = True
+            self._xy_pending = self.read_xy
+        else:
+            self._read_place()
+            if self.read_xy:
+                self._read_xy()
+            if pop.continuous.any():  # before the look-ahead, which follows the new route
+                self._route_continuously(self._lanes.edge_index[self._lane_key])  # type: ignore[union-attr]
+            if self.LAZY_FOLLOWING:
+                for name in _FOLLOWING:
+                    self.__dict__.pop(name, None)
+            else:
+                self._find_following()
+        return speed
+
+    def _read_place(self) -> None:
+        """Every car's lane and position on it, and what follows from them (this step)."""
+        self._place_pending = False
+        fast, lanes, ids = self._fast, self._lanes, self.table.ids
+        assert lanes is not None
+        keys = lanes.keys(list(map(fast.get_lane_id, ids)))
+        lane_pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, len(ids))
         self._lane_key = keys
         self._lane_pos = lane_pos
         self.lanes = lanes.lane_index[keys]
         self.position = lanes.start[keys] + lane_pos
         self.speed_limit = lanes.speed_limit[keys]
         self.on_internal = lanes.internal[keys]
-        self._stale_edges = True
-        if pop.continuous.any():  # before the look-ahead, which follows the new route
-            self._route_continuously(lanes.edge_index[keys])
-        # who follows whom is found when first asked this step (controllers, observations,
-        # frames ask; a step nobody asks — e.g. the first of two sims per env step with
-        # SUMO-driven humans — costs nothing)
-        self._pending = True
-        if self.LAZY_FOLLOWING:  # found when first read this step (OpenVehicleKernel)
-            for name in _FOLLOWING:
-                self.__dict__.pop(name, None)
-        else:
+
+    def _read_xy(self) -> None:
+        """Every car's map coordinates (this step)."""
+        self._xy_pending = False
+        xy = np.array(list(_flatten(map(self._fast.get_position, self.table.ids))), np.float64)
+        self.x, self.y = xy[0::2], xy[1::2]
+
+    def _read_pending(self) -> None:
+        """Read now what this step has not read yet (before a car leaves mid-step)."""
+        if self.__dict__.get("_place_pending"):
+            self._read_place()
+        if self.__dict__.get("_xy_pending"):
+            self._read_xy()
+        if self.__dict__.get("_pending") and self.LAZY_FOLLOWING and "leader" not in self.__dict__:
             self._find_following()
-        return speed
 
     def _find_following(self) -> None:
         """Leader, follower, headway, tailway and neighbour speeds of the current step."""
@@ -375,25 +407,20 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self._flow_counts.append((len(departed), len(arrived)))
         if not departed and not arrived and self._version == pop.version:
             return
-        gone = pop.rows([vid for vid in set(arrived) if vid in pop])
-        survivors = np.ones(pop.size, dtype=bool)
-        survivors[gone] = False
-        old_route_end = self._route_end
-        old_prev = self.speed
-        pop.remove(arrived)
-        for vid in arrived:
-            self._route_of.pop(vid, None)
         v = self.api.vehicle
         groups = [pop.class_index(v.getTypeID(vid)) for vid in departed]
-        pop.add(departed, groups)
+        old_route_end = self._route_end
+        old_prev = self.speed
+        src = pop.change(arrived, departed, groups)
+        for vid in arrived:
+            self._route_of.pop(vid, None)
         for vid, g in zip(departed, groups, strict=True):
             if g != pop.foreign:  # Flow's modes hold from a car's first step
                 c = pop.classes[g]
                 v.setSpeedMode(vid, c.speed_mode)
                 v.setLaneChangeMode(vid, c.lane_change_mode)
-        src = np.concatenate(
-            (np.flatnonzero(survivors), np.full(pop.size - int(survivors.sum()), -1))
-        )
+        if src is None:  # nothing changed (e.g. a removed car was never seen)
+            src = np.arange(pop.size)
         self._resize(src, old_route_end, old_prev)
         self._version = pop.version
 
@@ -450,6 +477,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
 
     def remove(self, veh_id: str) -> None:
         """Take a vehicle out of the simulation (it leaves the arrays at the next step)."""
+        if self.LAZY_FOLLOWING:
+            self._read_pending()  # this step's state, read while the car is still there
         self.api.vehicle.remove(veh_id)
         self._pending_removal.append(veh_id)
 
@@ -494,8 +523,15 @@ class OpenVehicleKernel(VehicleKernel):
             # of who follows whom are found when first read in a step, so a step nobody
             # asks (the first of two sims per env step with SUMO-driven humans) costs
             # nothing. The ring sets them every step and never comes here.
-            if name in _FOLLOWING and self.__dict__.get("_pending"):
+            d = self.__dict__
+            if name in _PLACE and d.get("_place_pending"):
+                self._read_place()
+                return d[name]
+            if name in _XY and d.get("_xy_pending"):
+                self._read_xy()
+                return d[name]
+            if name in _FOLLOWING and d.get("_pending"):
                 self._find_following()
-                return self.__dict__[name]
+                return d[name]
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
