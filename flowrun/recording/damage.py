@@ -115,6 +115,8 @@ class DamageReport:
                 parts.append("index damaged (data read by scanning)")
             elif x.part == "unfinished":
                 parts.append("log not finished (no footer)")
+            elif x.part not in ("chunk", "tail"):
+                parts.append(f"{x.part} damaged ({x.reason})")
         return "; ".join(parts)
 
     def describe(self) -> list[str]:

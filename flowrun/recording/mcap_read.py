@@ -256,9 +256,9 @@ def chunk_records(f: IO[bytes], ref: ChunkRef, size: int) -> bytes:
         raise BadRecord("chunk header disagrees with the index")
     data = _read(f, head.data_offset, head.data_size)
     if head.compression == "zstd":
-        if zstandard.frame_content_size(data) != head.uncompressed_size:
-            raise BadRecord("compressed data does not match the chunk's size")
         try:
+            if zstandard.frame_content_size(data) != head.uncompressed_size:
+                raise BadRecord("compressed data does not match the chunk's size")
             records = zstandard.ZstdDecompressor().decompress(
                 data, max_output_size=head.uncompressed_size
             )

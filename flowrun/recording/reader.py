@@ -84,7 +84,7 @@ class McapLog:
         file_bytes: size of the file.
     """
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, damaged_magic: Loss | None = None) -> None:
         self.path = path
         self.file_bytes = path.stat().st_size
         try:
@@ -94,6 +94,8 @@ class McapLog:
             raise RecordingError(f"cannot read {path}: {err}") from err
         self._st = st
         self.damage: DamageReport = st.damage
+        if damaged_magic is not None:
+            self.damage.losses.insert(0, damaged_magic)
         self.all_metadata = st.metadata
         self.attachments = st.attachments
         self._schemas: dict[int, Schema] = dict(st.schemas)
@@ -364,11 +366,19 @@ def open_log(path: str | os.PathLike[str]) -> McapLog:
         raise RecordingError(
             f"{p}: no such file; expected an MCAP log (runs/<config>/<run>/*.mcap)"
         )
-    with open(p, "rb") as f:
-        head = f.read(len(MCAP_MAGIC))
-    if head != MCAP_MAGIC:
-        raise RecordingError(
-            f"{p} is not an MCAP file (it does not start with the MCAP magic bytes); "
-            "expected a .mcap log written by flowrun"
-        )
-    return McapLog(p)
+    try:
+        with open(p, "rb") as f:
+            head = f.read(len(MCAP_MAGIC) + 1)
+    except OSError as err:
+        raise RecordingError(f"cannot read {p}: {err.strerror or err}") from None
+    if head[:8] == MCAP_MAGIC:
+        return McapLog(p)
+    # One damaged byte in the magic must not cost the log: accept 7 of 8 magic bytes
+    # followed by a Header record (opcode 0x01), and say so.
+    same = sum(a == b for a, b in zip(head, MCAP_MAGIC, strict=False))
+    if same >= len(MCAP_MAGIC) - 1 and head[8:9] == b"\x01":
+        return McapLog(p, Loss("magic", 0, "the leading magic bytes are damaged"))
+    raise RecordingError(
+        f"{p} is not an MCAP file (it does not start with the MCAP magic bytes); "
+        "expected a .mcap log written by flowrun"
+    )
