@@ -1,4 +1,5 @@
-"""``LaneChangeAccelEnv``: RL cars choose accelerations and lane changes on a multi-lane ring."""
+"""``LaneChangeAccelEnv``: RL cars choose accelerations and lane changes on a multi-lane
+ring or highway (Flow's ``flow.envs.ring.lane_change_accel``)."""
 
 from __future__ import annotations
 
@@ -7,14 +8,15 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium.spaces import Box
 
-from flowrun.envs.ring.accel import AccelEnv, clip_unit
+from flowrun.envs.ring.accel import AccelEnv, clip_unit, fit
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     # maximum acceleration of the RL cars, m/s^2
     "max_accel": 3,
     # maximum deceleration of the RL cars, m/s^2
     "max_decel": 3,
-    # minimum time between two lane changes of one RL car, s
+    # simulation steps an RL car waits after a lane change before it may change again
+    # (Flow's counter counts steps although its comment says seconds)
     "lane_change_duration": 5,
     # desired speed of all cars, m/s
     "target_velocity": 10,
@@ -27,16 +29,22 @@ LANE_CHANGE_PENALTY = 0.1  # reward lost per RL lane change (Flow: 10% of the be
 
 
 class LaneChangeAccelEnv(AccelEnv):
-    """Multi-lane ring with acceleration and lane-change actions (Flow's ``LaneChangeAccelEnv``).
+    """Acceleration and lane-change actions for the RL cars (Flow's ``LaneChangeAccelEnv``),
+    on a multi-lane ring or an open multi-lane road (the highway).
 
-    Observation: ``3 * num_vehicles`` values in [0, 1]: speeds / max speed, positions /
-    length, lanes / number of lanes (Flow's normalisation).
+    Observation: ``3 * num_vehicles`` values in [0, 1] (``num_vehicles`` = the cars placed
+    at the start; zero-padded or cut when cars come and go): speeds / max speed, positions
+    ``get_x_by_id`` / length, lanes / the largest number of lanes (Flow's normalisation), in
+    :attr:`sorted_ids` order.
     Action: per RL car an acceleration in ``[-max_decel, max_accel]`` and a lane-change
     direction in ``[-1, 1]`` (rounded: -1 right, 0 stay, +1 left), interleaved
-    ``[a_0, d_0, a_1, d_1, ...]``. A car changes lane at most every ``lane_change_duration`` s
-    (Flow counts this in steps; flowrun in seconds).
-    Reward: desired velocity, as :class:`AccelEnv`, minus 0.1 for every RL car that changed
-    lane during the step (terms ``desired_velocity`` and ``lane_change_penalty`` in ``info``).
+    ``[a_0, d_0, a_1, d_1, ...]``, for the RL cars present in :attr:`sorted_ids` order
+    (extra actions are ignored). As Flow, a car whose last lane change (``get_last_lc``)
+    is at most ``lane_change_duration`` simulation steps ago keeps its lane.
+    Reward: desired velocity, as :class:`AccelEnv`, minus 0.1 for every RL car that
+    changed lane in the last simulation step (``info["reward_terms"]``:
+    ``desired_velocity``, ``lane_change_penalty``); the mean speed in evaluate mode.
+    Termination: collision; truncation: horizon.
     """
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
@@ -59,52 +67,45 @@ class LaneChangeAccelEnv(AccelEnv):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
-        """Start a new episode; lane-change timers restart with the simulation clock."""
-        self._last_lane_change: dict[str, float] = {}
-        self._rl_lanes: np.ndarray | None = None
+        """Start a new episode; lane changes are logged from here on (``get_last_lc``)."""
         obs, info = super().reset(seed=seed, options=options)
-        self._rl_lanes = self._current_rl_lanes()
+        self.k.vehicle.lane_change_log()
         return obs, info
-
-    def _current_rl_lanes(self) -> np.ndarray:
-        vk = self.k.vehicle
-        return np.array(vk.get_lane(vk.get_rl_ids()), dtype=np.int64)
 
     def get_state(self) -> Any:
         """Speeds, positions and lanes, normalised to [0, 1]."""
-        ids = self.sorted_ids
-        vk = self.k.vehicle
-        lanes = max(self.k.network.num_lanes(e) for e in self.k.network.get_edge_list())
-        speed = np.array(vk.get_speed(ids)) / self.k.network.max_speed()
-        pos = np.array([vk.get_x_by_id(v) for v in ids]) / self.k.network.length()
-        lane = np.array(vk.get_lane(ids), dtype=np.float64) / lanes
+        vk, net = self.k.vehicle, self.k.network
+        order = self._order()
+        n = self.initial_vehicles.num_vehicles
+        lanes = max(net.num_lanes(e) for e in net.get_edge_list())
+        speed = fit(vk.speed[order] / net.max_speed(), n)
+        pos = fit(vk.position[order] / net.length(), n)
+        lane = fit(vk.lanes[order] / lanes, n)
         return clip_unit(np.concatenate([speed, pos, lane]))
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired velocity minus 0.1 per RL lane change (mean speed when evaluating)."""
         reward = super().compute_reward(rl_actions, **kwargs)
-        lanes = self._current_rl_lanes()
-        before = self._rl_lanes
-        changes = 0 if before is None else int(np.count_nonzero(lanes != before))
-        self._rl_lanes = lanes
         if self.env_params.evaluate:
             return reward
+        vk = self.k.vehicle
+        changes = sum(1 for v in vk.get_rl_ids() if vk.get_last_lc(v) == self.time_counter)
         penalty = -LANE_CHANGE_PENALTY * changes if changes else 0.0
         self.reward_terms = {**self.reward_terms, "lane_change_penalty": penalty}
         return reward + penalty
 
     def _apply_rl_actions(self, rl_actions: Any) -> None:
+        vk = self.k.vehicle
+        rows = np.arange(vk.table.size)[self._order()]
+        ids = vk.table.ids
+        rl_ids = [ids[i] for i in rows[vk.table.is_rl[rows]].tolist()]
         actions = np.asarray(rl_actions, dtype=np.float64).reshape(-1)
         accel, direction = actions[::2], np.rint(actions[1::2])
-        vk = self.k.vehicle
-        rl_ids = vk.get_rl_ids()
-        now = self.k.simulation.time
+        n = min(len(rl_ids), accel.size)
+        if not n:
+            return
+        rl_ids = rl_ids[:n]
         wait = float(self.env_params.additional_params["lane_change_duration"])
-        last = self._last_lane_change
-        allowed = [now - last.get(v, -np.inf) >= wait for v in rl_ids]
-        direction = np.where(allowed, direction, 0.0)
-        for vid, d in zip(rl_ids, direction, strict=True):
-            if d != 0:
-                last[vid] = now
-        vk.apply_acceleration(rl_ids, accel)
-        vk.apply_lane_change(rl_ids, direction)
+        blocked = [self.time_counter <= wait + vk.get_last_lc(v) for v in rl_ids]
+        vk.apply_acceleration(rl_ids, accel[:n])
+        vk.apply_lane_change(rl_ids, np.where(blocked, 0.0, direction[:n]))
