@@ -49,11 +49,8 @@ def _builtin() -> dict[str, type]:
     }
 
 
-#: envs that only make sense on their own network, with a config naming it (no default
-#: experiment to register with Gymnasium): the bottleneck's and the open highway's
-NEEDS_CONFIG = frozenset(
-    {"BottleneckEnv", "BottleneckDesiredVelocityEnv", "DesiredVelocityEnv"}
-)
+#: envs registered with their own network's default experiment (Flow's bottleneck0)
+BOTTLENECK_ENVS = frozenset({"BottleneckEnv", "BottleneckDesiredVelocityEnv", "DesiredVelocityEnv"})
 
 
 def env_names() -> list[str]:
@@ -190,18 +187,19 @@ def register_envs() -> None:
     """Register every built-in env as ``flowrun/<Name>-v0`` with Gymnasium (idempotent).
 
     Without a ``config`` an env runs its default experiment: Flow's merge0 for
-    ``MergePOEnv`` (:mod:`flowrun.envs.defaults`), the ring for the others.
+    ``MergePOEnv`` (:mod:`flowrun.envs.defaults`), Flow's bottleneck0 for the bottleneck
+    envs (:mod:`flowrun.envs.bottleneck_defaults`), the ring for the others.
     """
     from flowrun.envs.defaults import DEFAULT_CONFIGS
 
     for name in sorted(_builtin()):  # the multi-agent envs are PettingZoo envs, not Gymnasium's
-        if name in NEEDS_CONFIG:
-            continue
         env_id = f"flowrun/{name}-v0"
         if env_id in gymnasium.registry:
             continue
         own_default = name in DEFAULT_CONFIGS
         entry = "defaults:make_with_default" if own_default else "factory:make_registered"
+        if name in BOTTLENECK_ENVS:
+            entry = "bottleneck_defaults:make_bottleneck"
         gymnasium.register(
             id=env_id,
             entry_point=f"flowrun.envs.{entry}",
