@@ -32,7 +32,7 @@ OVERRIDE_LOCATION = "--set"
 #: Deepest nesting of mappings and lists a config may have (flowrun's own need a handful).
 MAX_DEPTH = 64
 #: Most values (scalars, mappings, lists; an alias counts each time it is used) in a document.
-MAX_VALUES = 200_000
+MAX_VALUES = 100_000
 
 _TAG_INT = "tag:yaml.org,2002:int"
 _TAG_FLOAT = "tag:yaml.org,2002:float"
@@ -43,7 +43,11 @@ _TAG_TIMESTAMP = "tag:yaml.org,2002:timestamp"  # no setting is a date: ``2024-0
 _EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
 
 
-class ConfigLoader(yaml.SafeLoader):
+# libyaml's parser when PyYAML was built with it (about ten times faster), else PyYAML's own.
+_SafeLoader: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+class ConfigLoader(_SafeLoader):  # type: ignore[valid-type,misc]
     """PyYAML's safe loader with YAML 1.2 numbers: no sexagesimal ``1:30``, ``1e5`` a float."""
 
     def resolve(self, kind: Any, value: Any, implicit: Any) -> Any:
@@ -122,26 +126,45 @@ class _Walker:
         self.loader = loader
         self.locations = locations
         self.open: set[int] = set()  # nodes being walked, to refuse a recursive alias
-        self.count = 0  # values built so far (an alias counts each time it is used)
 
     def line_of(self, node: yaml.Node) -> str:
         return f"{self.locations.source}:{node.start_mark.line + 1}"
 
+    def check_size(self, node: yaml.Node) -> None:
+        """Refuse a document nested too deeply or expanding to too many values, before any
+        value is built (each distinct node is sized once, so a bomb costs nothing)."""
+        sizes: dict[int, int] = {}
+
+        def size(node: yaml.Node, path: KeyPath) -> int:
+            if id(node) in sizes:
+                return sizes[id(node)]
+            if len(path) > MAX_DEPTH:
+                raise ConfigError(
+                    f"nested more than {MAX_DEPTH} levels deep; a config has a few levels",
+                    format_path(path[:3]) + "...",
+                    self.line_of(node),
+                )
+            sizes[id(node)] = 1  # a recursive alias stops here; value() refuses it
+            total = 1
+            if isinstance(node, yaml.MappingNode):
+                for key_node, value_node in node.value:
+                    total += 1 + size(value_node, (*path, str(key_node.value)[:40]))
+            elif isinstance(node, yaml.SequenceNode):
+                for i, item in enumerate(node.value):
+                    total += size(item, (*path, i))
+            if total > MAX_VALUES:
+                raise ConfigError(
+                    f"expands to more than {MAX_VALUES} values (aliases used inside aliases?); "
+                    "a config is a few hundred values: write it out without nested aliases",
+                    format_path(path),
+                    self.line_of(node),
+                )
+            sizes[id(node)] = total
+            return total
+
+        size(node, ())
+
     def value(self, node: yaml.Node, path: KeyPath) -> Any:
-        self.count += 1
-        if self.count > MAX_VALUES:
-            raise ConfigError(
-                f"more than {MAX_VALUES} values (aliases expanding into each other?); "
-                "a config is a few hundred values: write it out without nested aliases",
-                format_path(path),
-                self.line_of(node),
-            )
-        if len(path) > MAX_DEPTH:
-            raise ConfigError(
-                f"nested more than {MAX_DEPTH} levels deep; a config has a few levels",
-                format_path(path),
-                self.line_of(node),
-            )
         if isinstance(node, yaml.ScalarNode):
             return self.loader.construct_object(node, deep=True)
         if id(node) in self.open:
@@ -213,7 +236,9 @@ def parse_yaml(text: str, source: str) -> tuple[Any, Locations]:
         if node is None:
             return None, locations
         locations.where[()] = f"{source}:{node.start_mark.line + 1}"
-        return _Walker(loader, locations).value(node, ()), locations
+        walker = _Walker(loader, locations)
+        walker.check_size(node)
+        return walker.value(node, ()), locations
     except yaml.MarkedYAMLError as err:
         mark = err.problem_mark or err.context_mark
         where = f"{source}:{mark.line + 1}" if mark is not None else source
