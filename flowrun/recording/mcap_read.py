@@ -148,6 +148,7 @@ class Structure:
 
     size: int
     profile: str = ""
+    library: str = ""
     schemas: dict[int, Schema] = field(default_factory=dict)
     channels: dict[int, Channel] = field(default_factory=dict)
     chunks: list[ChunkRef] = field(default_factory=list)
@@ -461,7 +462,8 @@ def _scan_small_record(f: IO[bytes], st: Structure, opcode: int, pos: int, lengt
             raise BadRecord("record too large")
         content = _read(f, pos + 9, length)
         if opcode == OP_HEADER:
-            st.profile = _Cursor(content).string()
+            cur = _Cursor(content)
+            st.profile, st.library = cur.string(), cur.string()
         elif opcode == OP_SCHEMA:
             sch = parse_schema(content)
             st.schemas[sch.id] = sch

@@ -125,7 +125,7 @@ class McapLog:
         """Logs written by the mcap library keep schemas/channels inside the chunks: read
         them from the first intact chunk(s); a flowrun log whose own records were damaged
         gets the recorder's fixed ones."""
-        if self._channel_id(schema.VEHICLES_TOPIC) is not None or not self._st.chunks:
+        if self._vehicles_ok() or not self._st.chunks:
             return
         with open(self.path, "rb") as f:
             for ref in self._st.chunks[:8]:
@@ -139,14 +139,13 @@ class McapLog:
                     elif opcode == OP_CHANNEL:
                         ch = mcap_read.parse_channel(records[start:end])
                         self._channels.setdefault(ch.id, ch)
-                if self._channel_id(schema.VEHICLES_TOPIC) is not None:
+                if self._vehicles_ok():
                     return
-        if self._st.profile == PROFILE and self.damage and 1 not in self._channels:
+        # McapRecorder (library "flowrun") registers vehicles = 1 and stats = 2 first
+        if (self._st.profile, self._st.library) == (PROFILE, "flowrun") and self.damage:
             schemas, channels = _default_channels()
-            for key, sch in schemas.items():
-                self._schemas.setdefault(key, sch)
-            for key, ch in channels.items():
-                self._channels.setdefault(key, ch)
+            self._schemas.update(schemas)
+            self._channels.update(channels)
             self.damage.add(
                 Loss(
                     "channels",
@@ -155,6 +154,12 @@ class McapLog:
                     "standard channels (vehicles = 1, stats = 2)",
                 )
             )
+
+    def _vehicles_ok(self) -> bool:
+        """Whether the vehicles channel is known, with its schema."""
+        channel = self._channels.get(self._channel_id(schema.VEHICLES_TOPIC) or -1)
+        sch = None if channel is None else self._schemas.get(channel.schema_id)
+        return sch is not None and sch.name == schema.VEHICLES_TYPE
 
     def _check_topics(self) -> None:
         channel = self._channel_id(schema.VEHICLES_TOPIC)
