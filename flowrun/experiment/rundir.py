@@ -17,10 +17,8 @@ the run measured, so two runs with the same seed write the same ``metrics.json``
 
 from __future__ import annotations
 
-import errno
 import json
 import logging
-import math
 import os
 import platform
 import shlex
@@ -39,6 +37,35 @@ from typing import Any
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, FlowrunError
+from flowrun.experiment.safeio import (
+    WRITE_ERRORS,
+    describe_os_error,
+    json_text,
+    write_json,
+)
+
+__all__ = [
+    "COMPLETE",
+    "CUT",
+    "FAILED",
+    "INTERRUPTED",
+    "RUNNING",
+    "Interrupted",
+    "RunStatus",
+    "check_out_dir",
+    "create_run_dir",
+    "describe_os_error",
+    "exit_code_of",
+    "is_complete",
+    "mark_done",
+    "mark_running",
+    "read_status",
+    "start_run",
+    "tracked_run",
+    "unique_dir",
+    "versions",
+    "write_json",
+]
 
 log = logging.getLogger(__name__)
 
@@ -256,6 +283,7 @@ def mark_running(run_dir: Path) -> None:
             "host": socket.gethostname(),
             "started": _now(),
         },
+        reserve=STATUS_RESERVE,
     )
 
 
@@ -272,7 +300,21 @@ def mark_done(
         data["error"] = error
     if exit_code is not None:
         data["exit_code"] = exit_code
-    write_json(path, data)
+    try:
+        write_json(path, data)
+    except OSError:  # disk full: overwrite the reserved bytes of the running status instead
+        text = json_text(data)
+        if len(text.encode()) > STATUS_RESERVE:
+            data["error"] = str(data.get("error", ""))[:500]
+            text = json_text(data)
+        raw = text.encode()
+        with path.open("r+b") as f:
+            size = f.seek(0, os.SEEK_END)
+            f.seek(0)
+            f.write(raw.ljust(size))  # same size or less: no new blocks needed
+            f.truncate()
+            f.flush()
+            os.fsync(f.fileno())
 
 
 def _alive(pid: int, start: str | None) -> bool:
@@ -314,20 +356,9 @@ def is_complete(run_dir: Path) -> bool:
     return read_status(run_dir).finished
 
 
-def describe_os_error(err: OSError) -> str:
-    """One line for a file-system error, naming the likely cause."""
-    hints = {
-        errno.ENOSPC: "disk full",
-        errno.EDQUOT: "disk quota exceeded",
-        errno.EFBIG: "file too large (file size limit reached)",
-        errno.EROFS: "read-only file system",
-        errno.EACCES: "permission denied",
-        errno.EPERM: "permission denied",
-        errno.ENOTDIR: "a file is in the way of a folder",
-    }
-    what = hints.get(err.errno or 0, err.strerror or str(err))
-    where = f" ({err.filename})" if err.filename else ""
-    return f"{what}{where}"
+#: ``status.json`` is written this big at the start (padded with spaces), so that its final
+#: version can overwrite it in place when the disk is full.
+STATUS_RESERVE = 2048
 
 
 def _has_results(run_dir: Path) -> bool:
@@ -364,7 +395,10 @@ def tracked_run(run_dir: Path, *, remove_if_empty: bool = True) -> Iterator[Path
             mark_done(run_dir, INTERRUPTED, exit_code=exit_code_of(err))
         raise
     except OSError as err:
-        message = f"cannot write run folder {run_dir}: {describe_os_error(err)}"
+        if err.errno in WRITE_ERRORS:
+            message = f"cannot write run folder {run_dir}: {describe_os_error(err)}"
+        else:
+            message = f"run failed: {describe_os_error(err)}"
         _fail(run_dir, message, remove_if_empty)
         raise FlowrunError(message) from None
     except FlowrunError as err:
@@ -386,34 +420,3 @@ def _fail(run_dir: Path, message: str, remove_if_empty: bool) -> None:
         mark_done(run_dir, FAILED, error=message.splitlines()[0] if message else "", exit_code=1)
     except OSError as err:
         log.warning("could not mark %s failed: %s", run_dir, describe_os_error(err))
-
-
-def json_safe(data: Any) -> Any:
-    """``data`` with every NaN and infinity replaced by ``None`` (JSON has neither)."""
-    if isinstance(data, float):
-        return data if math.isfinite(data) else None
-    if isinstance(data, dict):
-        return {k: json_safe(v) for k, v in data.items()}
-    if isinstance(data, (list, tuple)):
-        return [json_safe(v) for v in data]
-    return data
-
-
-def write_json(path: Path, data: Any) -> None:
-    """Write strict JSON atomically (a reader never sees half a file; NaN/inf become null).
-
-    Raises:
-        OSError: the file cannot be written (the temporary file is removed).
-    """
-    text = json.dumps(json_safe(data), indent=2, sort_keys=True, default=str, allow_nan=False)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with tmp.open("w") as f:
-            f.write(text + "\n")
-            f.flush()
-            os.fsync(f.fileno())
-        tmp.replace(path)
-    except BaseException:
-        with suppress(OSError):
-            tmp.unlink()
-        raise

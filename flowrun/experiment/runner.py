@@ -158,8 +158,10 @@ class Experiment:
             ret = 0.0
             rewards = array("d")  # 8 bytes a step: memory stays flat over long runs
             values: dict[str, list[Any]] = {key: [] for key in self.custom_callables}
+            started = False  # no metrics and no on_run_end for a run whose reset failed
             try:
                 obs, _ = env.reset(seed=None if seed is None else seed + run)
+                started = True
                 sink = sink_factory(run) if sink_factory else None
                 if hooks is not None:
                     hooks.on_reset(env)
@@ -191,9 +193,10 @@ class Experiment:
                 finally:
                     if sink is not None:
                         sink.close()
-                    self.metrics.append(stats.result(run, ret))
-                    if hooks is not None:
-                        hooks.on_run_end(env, run)
+                    if started:
+                        self.metrics.append(stats.result(run, ret))
+                        if hooks is not None:
+                            hooks.on_run_end(env, run)
             returns.append(ret)
             per_step.append(rewards.tolist())
             outflows.append(_outflow(env))
