@@ -1,0 +1,236 @@
+"""``evaluate_rllib``: roll an RLlib checkpoint out beside the all-human baseline, to MCAP.
+
+The policies are read from the checkpoint's RL modules (no Ray instance is started): the
+module's inference output, its action distribution's mode (``deterministic``) or a sample,
+and RLlib's action unsquashing to the action space (RLlib's default ``normalize_actions``).
+Episodes run through :class:`~flowrun.experiment.runner.Experiment` as the SB3 evaluation's
+do, so ``<run>/eval/<timestamp>/`` holds the same ``metrics.json``, ``policy_<i>.mcap`` and
+``baseline_<i>.mcap``. A multi-agent episode's return is the sum over steps of the mean
+reward of the agents rewarded at that step (the shared reward, for Flow's shared rewards).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Sequence
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any, cast
+
+import numpy as np
+
+from flowrun.config.dump import dump_config
+from flowrun.config.model import ExperimentConfig
+from flowrun.envs.base import Env
+from flowrun.envs.factory import make_env
+from flowrun.errors import ConfigError, TrainingError
+from flowrun.experiment.baseline import open_run_log
+from flowrun.experiment.metrics import RunMetrics
+from flowrun.experiment.rundir import unique_dir, write_json
+from flowrun.experiment.runner import Experiment, FrameSink
+from flowrun.training.evaluate import EvalProgress, EvalResult, all_human, eval_config
+from flowrun.training.rllib.deps import require_ray
+from flowrun.training.rllib.train import BEST_CHECKPOINT, FINAL_CHECKPOINT
+from flowrun.training.trainer import train_section
+
+#: Where an RLlib (new API stack) checkpoint keeps its RL modules.
+MODULES_SUBDIR = ("learner_group", "learner", "rl_module")
+
+
+def checkpoint_path(run_dir: Path, which: str = "best") -> Path:
+    """``best`` (falls back to ``final``), ``final``, or a checkpoint folder (e.g.
+    ``checkpoints/iter_000002``, relative to the run folder or absolute).
+
+    Raises:
+        TrainingError: the checkpoint does not exist.
+    """
+    if which in ("best", "final"):
+        order = (BEST_CHECKPOINT, FINAL_CHECKPOINT) if which == "best" else (FINAL_CHECKPOINT,)
+        for name in order:
+            if (run_dir / name).is_dir():
+                return run_dir / name
+        raise TrainingError(
+            f"{run_dir} has no {' or '.join(order)}; train first, resume an interrupted run, "
+            "or pass --model checkpoints/iter_<n>"
+        )
+    path = Path(which) if Path(which).is_absolute() else run_dir / which
+    if not path.joinpath(*MODULES_SUBDIR).is_dir():
+        raise TrainingError(
+            f"--model must be best, final or an RLlib checkpoint folder; {path} is none"
+        )
+    return path
+
+
+class ModulePolicy:
+    """One RLlib RL module as a function from an observation to an action.
+
+    Args:
+        module: the RL module (torch).
+        deterministic: the distribution's mode instead of a sample.
+    """
+
+    def __init__(self, module: Any, deterministic: bool) -> None:
+        self.module = module
+        self.deterministic = deterministic
+        self.dist_cls = module.get_inference_action_dist_cls()
+        self.space = module.action_space
+
+    def __call__(self, obs: Any) -> Any:
+        """The action for one observation."""
+        import torch
+        from gymnasium.spaces import Box
+        from ray.rllib.utils.spaces.space_utils import unsquash_action
+
+        batch = torch.from_numpy(np.asarray(obs, dtype=np.float32)[None, ...])
+        with torch.no_grad():
+            out = self.module.forward_inference({"obs": batch})
+            dist = self.dist_cls.from_logits(out["action_dist_inputs"])
+            if self.deterministic:
+                dist = dist.to_deterministic()
+            action = dist.sample()[0].numpy()
+        if isinstance(self.space, Box):
+            return np.asarray(unsquash_action(action, self.space), dtype=np.float32)
+        return action
+
+
+def load_policies(checkpoint: Path, deterministic: bool = True) -> dict[str, ModulePolicy]:
+    """Every policy (module id -> :class:`ModulePolicy`) of an RLlib checkpoint."""
+    require_ray()
+    from ray.rllib.core.rl_module.rl_module import RLModule
+
+    root = checkpoint.joinpath(*MODULES_SUBDIR).resolve()
+    multi: Any = RLModule.from_checkpoint(str(root))  # a MultiRLModule: module id -> module
+    return {str(mid): ModulePolicy(multi[mid], deterministic) for mid in list(multi.keys())}
+
+
+class JointView:
+    """A flowrun multi-agent env as :class:`Experiment` steps it: joint observation and action
+    dicts, the mean of the agents' rewards, the episode's end from ``episode_over``."""
+
+    def __init__(self, env: Any) -> None:
+        object.__setattr__(self, "_env", env)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._env, name)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        setattr(self._env, name, value)
+
+    def reset(self, seed: int | None = None, options: dict[str, Any] | None = None) -> Any:
+        """Reset the env."""
+        return self._env.reset(seed=seed, options=options)
+
+    def step(self, actions: dict[str, Any] | None) -> tuple[Any, float, bool, bool, Any]:
+        """One step; ``None`` (the baseline) sends no action."""
+        env = self._env
+        obs, rewards, _, _, infos = env.step(actions or {})
+        reward = float(np.mean(list(rewards.values()))) if rewards else 0.0
+        over = bool(env.episode_over)
+        crash = any(bool(i.get("crash")) for i in infos.values())
+        terminated = over and (crash or env.step_counter < env.env_params.horizon)
+        return obs, reward, terminated, over and not terminated, infos
+
+
+def evaluate_rllib(
+    run_dir: Path,
+    episodes: int = 1,
+    deterministic: bool = True,
+    overrides: Sequence[str] = (),
+    config_override: Path | None = None,
+    model: str = "best",
+    progress: EvalProgress | None = None,
+) -> EvalResult:
+    """Roll out the RLlib policy and the all-human baseline, ``episodes`` each (as
+    :func:`flowrun.training.evaluate`).
+
+    Episode ``i`` of both resets with seed ``sim.seed + i``. Writes ``metrics.json`` and the
+    MCAP logs (``policy_<i>.mcap``, ``baseline_<i>.mcap``) to ``<run>/eval/<timestamp>/``.
+
+    Args:
+        run_dir: the train run folder.
+        episodes: episodes of each rollout.
+        deterministic: the policy's mode instead of sampled actions.
+        overrides: ``--set`` overrides of the run's config.
+        config_override: a YAML whose sections override the run's config.
+        model: ``best``, ``final`` or a checkpoint folder (see :func:`checkpoint_path`).
+        progress: called as ``progress(label, episode, step)``.
+
+    Raises:
+        ConfigError: ``episodes`` < 1 or a bad override.
+        TrainingError: no such checkpoint, or no rllib extra.
+    """
+    if episodes < 1:
+        raise ConfigError(f"--episodes must be >= 1, got {episodes}")
+    cfg = eval_config(run_dir, overrides, config_override)
+    tc = train_section(cfg)
+    path = checkpoint_path(run_dir, model)
+    policies = load_policies(path, deterministic)
+    out_dir = unique_dir(run_dir / "eval" / datetime.now(UTC).strftime("%Y%m%d-%H%M%S"))
+    (out_dir / "config.yaml").write_text(dump_config(cfg))
+    seed = int(cfg.sim.seed or 0)
+    logs: list[Path] = []
+    act = _actor(cfg, run_dir, tc.policies, policies)
+    rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
+    human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs, progress)
+    result = EvalResult(out_dir, path, rl, human, logs)
+    write_json(
+        out_dir / "metrics.json",
+        {"seed": seed, "deterministic": deterministic, "backend": "rllib", **result.to_dict()},
+    )
+    return result
+
+
+def _actor(
+    cfg: ExperimentConfig, run_dir: Path, mode: str, policies: dict[str, ModulePolicy]
+) -> Callable[[Any], Any]:
+    """``obs -> action`` for a single-agent run, ``{agent: obs} -> {agent: action}`` else."""
+    mapping_file = run_dir / "policies.json"
+    if not mapping_file.is_file():
+        policy = policies.get("default_policy") or next(iter(policies.values()))
+        return policy
+    saved: dict[str, str] = json.loads(mapping_file.read_text())
+    fallback = mode == "shared" and "shared" in policies
+
+    def act(obs: dict[str, Any]) -> dict[str, Any]:
+        actions = {}
+        for agent, o in obs.items():
+            module = saved.get(agent, "shared" if fallback else "")
+            if module not in policies:
+                raise TrainingError(
+                    f"agent {agent} has no policy in the checkpoint (policies: "
+                    f"{', '.join(sorted(policies))}); evaluate with the training config's agents"
+                )
+            actions[agent] = policies[module](o)
+        return actions
+
+    return act
+
+
+def _rollout(
+    cfg: ExperimentConfig,
+    label: str,
+    episodes: int,
+    seed: int,
+    act: Callable[[Any], Any] | None,
+    out_dir: Path,
+    logs: list[Path],
+    progress: EvalProgress | None,
+) -> list[RunMetrics]:
+    raw = make_env(cfg)
+    env = JointView(raw) if getattr(raw, "episode_over", None) is not None else raw
+
+    def sink(run: int) -> FrameSink:
+        path = out_dir / f"{label}_{run}.mcap"
+        logs.append(path)
+        return open_run_log(path, raw, cfg, seed + run, run, extra={"evaluation": label})
+
+    def on_step(run: int, step: int) -> None:
+        if progress is not None:
+            progress(label, run, step)
+
+    try:
+        experiment = Experiment(cast(Env, env), sink_factory=sink, progress=on_step)
+        experiment.run(episodes, int(cfg.env.horizon), rl_actions=act, seed=seed)
+    finally:
+        raw.close()
+    return list(experiment.metrics)

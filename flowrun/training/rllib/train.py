@@ -1,0 +1,336 @@
+"""``train_rllib``: a config's ``train:`` section -> RLlib PPO -> the run folder SB3 runs write.
+
+Run folder (``runs/<name>/<timestamp>-<seed>/``): ``config.yaml``, ``command.txt``,
+``versions.json`` (with Ray's version), ``tensorboard/`` (RLlib's main metrics per iteration),
+``progress.jsonl`` (one line per iteration), ``policies.json`` (multi-agent: agent -> policy),
+``checkpoints/iter_<n>/`` (RLlib checkpoints) with ``checkpoints/state.json`` (the latest),
+``best_checkpoint/`` (best evaluation return, when evaluating during training),
+``final_checkpoint/``, ``metrics.json``; the final evaluation goes under ``eval/``
+(:func:`flowrun.training.rllib.evaluate.evaluate_rllib`).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import re
+import shlex
+import shutil
+import sys
+import time
+from collections.abc import Iterator
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from flowrun.config.dump import dump_config
+from flowrun.config.model import ExperimentConfig, TrainConfig
+from flowrun.errors import TrainingError
+from flowrun.experiment.rundir import create_run_dir, write_json
+from flowrun.training.callbacks import TrainProgress
+from flowrun.training.rllib.cluster import ray_session
+from flowrun.training.rllib.deps import require_ray
+from flowrun.training.rllib.options import (
+    build_ppo_config,
+    check_train_config,
+    env_runners,
+    steps_per_iteration,
+)
+from flowrun.training.trainer import TrainResult, train_section, train_seed
+
+log = logging.getLogger(__name__)
+
+BEST_CHECKPOINT = "best_checkpoint"
+FINAL_CHECKPOINT = "final_checkpoint"
+STATE_FILE = "state.json"
+#: RLlib result entries written to TensorBoard (paths joined with ``/``).
+TB_KEYS = re.compile(
+    r"^(env_runners/(episode_(return|len)_(mean|min|max)|num_episodes)"
+    r"|evaluation/env_runners/episode_(return|len)_mean"
+    r"|learners/[^/]+/(policy_loss|vf_loss|entropy|mean_kl_loss|total_loss|vf_explained_var)"
+    r"|num_env_steps_sampled_lifetime|time_this_iter_s)$"
+)
+
+
+def train_rllib(
+    cfg: ExperimentConfig,
+    out: Path = Path("runs"),
+    resume_dir: Path | None = None,
+    progress: TrainProgress | None = None,
+    argv: list[str] | None = None,
+    ray_address: str | None = None,
+) -> TrainResult:
+    """Train the config's policy with RLlib's PPO and write the run folder.
+
+    Trains until ``train.total_timesteps`` env steps are sampled (whole iterations of
+    RLlib's train batch). Multi-agent envs train ``train.policies`` policies.
+
+    Args:
+        cfg: the experiment, with a ``train:`` section (``backend: rllib``). To resume, pass
+            the run folder's config, possibly with a larger ``train.total_timesteps``.
+        out: parent of new run folders.
+        resume_dir: an earlier run folder to continue from its last checkpoint (RLlib's
+            iteration and step counters continue).
+        progress: called with ``(timesteps done, total, mean episode return)`` per iteration.
+        argv: the command line saved in ``command.txt``.
+        ray_address: a Ray cluster to attach to; ``None`` reads ``RAY_ADDRESS`` and without it
+            starts a local Ray instance for the run.
+
+    A ``KeyboardInterrupt`` saves a checkpoint, writes ``metrics.json`` with
+    ``status: interrupted`` and propagates.
+
+    Raises:
+        ConfigError: bad ``train:`` settings (before any work).
+        TrainingError: no rllib extra, unreachable cluster, nothing to resume from.
+    """
+    from flowrun.training.rllib.envs import (
+        ENV_NAME,
+        env_config_of,
+        policy_mapping,
+        probe_agents,
+        register,
+    )
+
+    ray = require_ray()
+    tc = train_section(cfg)
+    seed = train_seed(cfg)
+    cfg = replace(cfg, sim=replace(cfg.sim, seed=int(cfg.sim.seed or 0)))
+    sections = check_train_config(tc)
+    agents = probe_agents(cfg)  # a wrong env.class fails here, before Ray starts
+    policies = policy_mapping(cfg, agents, tc.policies) if agents is not None else None
+    state = read_state(resume_dir) if resume_dir is not None else None
+    if resume_dir is not None and state is not None:
+        run_dir = resume_dir
+        _note_resume(run_dir, cfg, state, argv)
+    else:
+        run_dir = create_run_dir(out, cfg, seed, argv)
+    _add_version(run_dir, "ray", str(ray.__version__))
+    if policies is not None:
+        write_json(run_dir / "policies.json", policies)
+    ckpt_dir = run_dir / "checkpoints"
+    ckpt_dir.mkdir(exist_ok=True)
+    done = int(state["timesteps"]) if state else 0
+    best = state.get("best_return") if state else None
+    status, wall, iteration, address = "interrupted", 0.0, 0, ""
+    algo: Any = None
+    try:
+        with ray_session(ray_address) as session:
+            address = session.address
+            register()
+            iter_steps = steps_per_iteration(
+                build_ppo_config(sections, ENV_NAME, {}, 0, seed, session.cpus)
+            )
+            config = build_ppo_config(
+                sections, ENV_NAME, env_config_of(cfg), env_runners(tc),
+                seed if state is None else seed + done,  # resumed runs see new episodes
+                session.cpus,
+                env_config_of(cfg, evaluate=True) if tc.eval_freq > 0 else None,
+                eval_interval=max(1, round(tc.eval_freq / iter_steps)),
+                eval_episodes=tc.eval_episodes,
+                policies=policies,
+            )  # fmt: skip
+            algo = config.build_algo()
+            if state is not None:
+                algo.restore_from_path(str((ckpt_dir / state["checkpoint"]).resolve()))
+            start = time.monotonic()
+            from tensorboardX import SummaryWriter
+
+            writer = SummaryWriter(str(run_dir / "tensorboard"))
+            try:
+                for result in _iterations(algo, tc, done):
+                    iteration = int(result["training_iteration"])
+                    before, done = done, int(result.get("num_env_steps_sampled_lifetime", 0))
+                    ret = _number(result, "env_runners", "episode_return_mean")
+                    score = _number(result, "evaluation", "env_runners", "episode_return_mean")
+                    _log_iteration(run_dir, writer, result, iteration, done, ret, score)
+                    if score is not None and (best is None or score > best):
+                        best = score
+                        _save(algo, run_dir / BEST_CHECKPOINT)
+                    freq = tc.checkpoint_freq
+                    if freq > 0 and done // freq > before // freq:
+                        save_checkpoint(algo, ckpt_dir, iteration, done, best)
+                    if progress is not None:
+                        progress(done, tc.total_timesteps, ret)
+                status = "complete"
+                _save(algo, run_dir / FINAL_CHECKPOINT)
+                save_checkpoint(algo, ckpt_dir, iteration or algo.iteration, done, best)
+            except KeyboardInterrupt:
+                path = save_checkpoint(algo, ckpt_dir, algo.iteration, done, best)
+                log.info("interrupted: checkpoint saved to %s", path)
+                raise
+            finally:
+                wall = time.monotonic() - start
+                writer.close()
+                algo.stop()
+                algo = None
+    finally:
+        if algo is not None:
+            algo.stop()
+        _write_metrics(run_dir, cfg, tc, seed, status, done, wall, state, iteration, best,
+                       address, policies)  # fmt: skip
+    resumed = int(state["timesteps"]) if state else 0
+    return TrainResult(run_dir, done, wall, status, resumed)
+
+
+def _iterations(algo: Any, tc: TrainConfig, done: int) -> Iterator[dict[str, Any]]:
+    """``algo.train()`` results until ``total_timesteps`` env steps are sampled."""
+    while done < tc.total_timesteps:
+        result = algo.train()
+        done = int(result.get("num_env_steps_sampled_lifetime", 0))
+        yield result
+
+
+def _number(result: dict[str, Any], *path: str) -> float | None:
+    value: Any = result
+    for key in path:
+        if not isinstance(value, dict) or key not in value:
+            return None
+        value = value[key]
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return None
+    return number if math.isfinite(number) else None
+
+
+def _flat(result: dict[str, Any], prefix: str = "") -> Iterator[tuple[str, float]]:
+    for key, value in result.items():
+        path = f"{prefix}{key}"
+        if isinstance(value, dict):
+            yield from _flat(value, path + "/")
+        elif isinstance(value, int | float) and not isinstance(value, bool):
+            yield path, float(value)
+
+
+def _log_iteration(
+    run_dir: Path,
+    writer: Any,
+    result: dict[str, Any],
+    iteration: int,
+    done: int,
+    ret: float | None,
+    score: float | None,
+) -> None:
+    """One TensorBoard step (x = env steps) and one ``progress.jsonl`` line per iteration."""
+    for key, value in _flat(result):
+        if TB_KEYS.match(key) and math.isfinite(value):
+            writer.add_scalar(f"rllib/{key}", value, done)
+    writer.flush()
+    line = {
+        "iteration": iteration,
+        "timesteps": done,
+        "episode_return_mean": ret,
+        "eval_return_mean": score,
+        "time_this_iter_s": round(float(result.get("time_this_iter_s", 0.0)), 3),
+    }
+    with (run_dir / "progress.jsonl").open("a") as f:
+        f.write(json.dumps(line) + "\n")
+
+
+def _save(algo: Any, path: Path) -> None:
+    """Save an RLlib checkpoint to ``path``, replacing an earlier one only once it is written."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    shutil.rmtree(tmp, ignore_errors=True)
+    algo.save_to_path(str(tmp.resolve()))
+    old = path.with_name(f".{path.name}.old")
+    if path.exists():
+        path.rename(old)
+    tmp.rename(path)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def save_checkpoint(
+    algo: Any, ckpt_dir: Path, iteration: int, timesteps: int, best: float | None
+) -> Path:
+    """Save ``checkpoints/iter_<n>/`` and point ``checkpoints/state.json`` at it."""
+    name = f"iter_{int(iteration):06d}"
+    _save(algo, ckpt_dir / name)
+    write_json(
+        ckpt_dir / STATE_FILE,
+        {"checkpoint": name, "iteration": int(iteration), "timesteps": int(timesteps),
+         "best_return": best},
+    )  # fmt: skip
+    return ckpt_dir / name
+
+
+def read_state(run_dir: Path) -> dict[str, Any]:
+    """The latest checkpoint of a run folder (``checkpoints/state.json``).
+
+    Raises:
+        TrainingError: not a run folder, or no checkpoint.
+    """
+    if not (run_dir / "config.yaml").is_file():
+        raise TrainingError(f"{run_dir} is not a run folder (no config.yaml); pass a train run")
+    path = run_dir / "checkpoints" / STATE_FILE
+    try:
+        state = json.loads(path.read_text())
+    except (OSError, ValueError):
+        raise TrainingError(
+            f"{run_dir} has no RLlib checkpoint to resume from (no readable "
+            "checkpoints/state.json); set train.checkpoint_freq or start a new run"
+        ) from None
+    if not (run_dir / "checkpoints" / str(state.get("checkpoint"))).is_dir():
+        raise TrainingError(f"{path} names a checkpoint that is missing: {state.get('checkpoint')}")
+    return dict(state)
+
+
+def _note_resume(
+    run_dir: Path, cfg: ExperimentConfig, state: dict[str, Any], argv: list[str] | None
+) -> None:
+    """Append the command line; keep the earlier config if the resumed one differs."""
+    command = argv if argv is not None else sys.argv
+    with (run_dir / "command.txt").open("a") as f:
+        f.write(shlex.join(command) + "\n")
+    text = dump_config(cfg)
+    current = run_dir / "config.yaml"
+    if current.read_text() != text:
+        current.rename(run_dir / f"config.before_{state['timesteps']}.yaml")
+        current.write_text(text)
+
+
+def _add_version(run_dir: Path, name: str, value: str) -> None:
+    path = run_dir / "versions.json"
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        data = {}
+    data[name] = value
+    write_json(path, data)
+
+
+def _write_metrics(
+    run_dir: Path,
+    cfg: ExperimentConfig,
+    tc: TrainConfig,
+    seed: int,
+    status: str,
+    done: int,
+    wall: float,
+    state: dict[str, Any] | None,
+    iteration: int,
+    best: float | None,
+    address: str,
+    policies: dict[str, str] | None,
+) -> None:
+    resumed = int(state["timesteps"]) if state else None
+    write_json(
+        run_dir / "metrics.json",
+        {
+            "status": status,
+            "backend": "rllib",
+            "config": cfg.name,
+            "seed": seed,
+            "algorithm": "PPO",
+            "num_env_runners": env_runners(tc),
+            "ray": address,
+            "iterations": iteration,
+            "timesteps": done,
+            "total_timesteps": tc.total_timesteps,
+            "resumed_from": resumed,
+            "best_eval_return": best,
+            "policies": sorted(set(policies.values())) if policies else ["default_policy"],
+            "wall_clock_s": round(wall, 3),
+            "steps_per_s": round((done - (resumed or 0)) / wall, 1) if wall > 0 else None,
+        },
+    )
