@@ -15,7 +15,12 @@ from gymnasium.utils.env_checker import check_env
 
 from flowrun.config.loader import load_config, override_config
 from flowrun.config.params import InitialConfig, NetParams, VehicleParams
-from flowrun.envs import BottleneckDesiredVelocityEnv, BottleneckEnv, DesiredVelocityEnv
+from flowrun.envs import (
+    BottleneckAccelEnv,
+    BottleneckDesiredVelocityEnv,
+    BottleneckEnv,
+    DesiredVelocityEnv,
+)
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError
 from flowrun.networks import BottleneckNetwork
@@ -189,3 +194,27 @@ def test_desired_velocity_env_is_flows_bottleneck0() -> None:
         # humans per cell / 20 sum to the humans on the observed edges / 20
         humans = sum(1 for v in vk.get_human_ids() if vk.get_edge(v) in ("1", "2", "3", "4", "5"))
         assert obs[:35].sum() * 20 == pytest.approx(humans)
+
+
+def test_accel_env_brings_its_av_back_after_it_leaves() -> None:
+    with env_of("bottleneck_desired_velocity", "env.class=BottleneckAccelEnv",
+                "env.additional_params.add_rl_if_exit=true", "env.warmup_steps=0",
+                "env.horizon=400") as env:  # fmt: skip
+        assert isinstance(env, BottleneckAccelEnv)
+        assert env.rl_id_list == ["rl_0"]
+        assert env.observation_space.shape == (4 + 16 + 2 * 5,)
+        check_env(env, skip_render_check=True)
+        env.reset(seed=0)
+        vk = env.k.vehicle
+        path = []
+        for _ in range(400):
+            obs, reward, _, _, info = env.step(np.array([1.0, 0.0], dtype=np.float32))
+            path.append(vk.get_edge("rl_0") if "rl_0" in vk.table else None)
+        left = path.index(None)  # it drove off the end of edge 5 ...
+        assert path[left - 1] == "5"
+        back = [e for e in path[left:] if e is not None]
+        assert back and back[0] == "1"  # ... and entered again at the start
+        assert obs.min() >= 0.0 and obs.max() <= 1.0
+        rl_speed = sum(vk.get_speed(v) for v in vk.get_rl_ids())
+        assert info["reward_terms"]["forward_progress"] == pytest.approx(0.1 * rl_speed)
+        assert reward == pytest.approx(sum(info["reward_terms"].values()))

@@ -2,6 +2,7 @@
 
 from flowrun.envs.base import Env
 from flowrun.envs.bottleneck import BottleneckEnv
+from flowrun.envs.bottleneck_accel import BottleneckAccelEnv
 from flowrun.envs.bottleneck_velocity import BottleneckDesiredVelocityEnv, DesiredVelocityEnv
 from flowrun.envs.merge import MergePOEnv
 from flowrun.envs.registry import env_names, register_envs, resolve_env_class
@@ -19,6 +20,7 @@ register_envs()
 
 __all__ = [
     "AccelEnv",
+    "BottleneckAccelEnv",
     "BottleneckDesiredVelocityEnv",
     "BottleneckEnv",
     "DesiredVelocityEnv",

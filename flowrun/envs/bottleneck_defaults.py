@@ -1,8 +1,8 @@
 """Default experiment of the bottleneck envs: Flow's bottleneck0.
 
 ``gymnasium.make("flowrun/BottleneckDesiredVelocityEnv-v0")`` (or ``BottleneckEnv``,
-``DesiredVelocityEnv``) without a config runs :func:`bottleneck0_config`, the experiment of
-``configs/bottleneck_desired_velocity.yaml``.
+``BottleneckAccelEnv``, ``DesiredVelocityEnv``) without a config runs
+:func:`bottleneck0_config`, the experiment of ``configs/bottleneck_desired_velocity.yaml``.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from flowrun.config.params import (
     SumoParams,
     VehicleParams,
 )
+from flowrun.envs.bottleneck_accel import ADDITIONAL_RL_ENV_PARAMS
 from flowrun.envs.bottleneck_velocity import ADDITIONAL_ENV_PARAMS
 
 #: Flow's bottleneck0: total inflow (veh/h, times the scaling) and the share of AVs in it
@@ -52,6 +53,7 @@ def bottleneck0_config(env_name: str = "BottleneckDesiredVelocityEnv") -> Experi
                     depart_lane="random", depart_speed=10)  # fmt: skip
     params: dict[str, Any] = {
         **ADDITIONAL_ENV_PARAMS,
+        **ADDITIONAL_RL_ENV_PARAMS,  # BottleneckAccelEnv's keys (the others ignore them)
         "target_velocity": 40,
         "controlled_segments": CONTROLLED,
         "observed_segments": OBSERVED,

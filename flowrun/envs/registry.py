@@ -18,6 +18,7 @@ from flowrun.suggest import did_you_mean, unknown_name
 
 def _builtin() -> dict[str, type]:
     from flowrun.envs.bottleneck import BottleneckEnv
+    from flowrun.envs.bottleneck_accel import BottleneckAccelEnv
     from flowrun.envs.bottleneck_velocity import BottleneckDesiredVelocityEnv
     from flowrun.envs.merge import MergePOEnv
     from flowrun.envs.ring.accel import AccelEnv
@@ -40,6 +41,7 @@ def _builtin() -> dict[str, type]:
             LaneChangeAccelEnv,
             MergePOEnv,
             BottleneckEnv,
+            BottleneckAccelEnv,
             BottleneckDesiredVelocityEnv,
             TestEnv,
             TrafficLightGridEnv,
@@ -50,7 +52,9 @@ def _builtin() -> dict[str, type]:
 
 
 #: envs registered with their own network's default experiment (Flow's bottleneck0)
-BOTTLENECK_ENVS = frozenset({"BottleneckEnv", "BottleneckDesiredVelocityEnv", "DesiredVelocityEnv"})
+BOTTLENECK_ENVS = frozenset(
+    {"BottleneckEnv", "BottleneckAccelEnv", "BottleneckDesiredVelocityEnv", "DesiredVelocityEnv"}
+)
 
 
 def env_names() -> list[str]:

@@ -209,9 +209,14 @@ class VehicleCommands:
         self.__dict__.setdefault("_max_speed_set", {})[veh_id] = float(max_speed)
 
     def add(self, veh_id: str, type_id: str, edge: str, pos: float | str,
-            lane: int | str, speed: float | str) -> None:  # fmt: skip
-        """Flow's ``k.vehicle.add``: insert a car of group ``type_id`` on ``edge`` now, on
-        the route of that edge (it joins the arrays when SUMO reports it departed).
+            lane: int | str, speed: float | str) -> bool:  # fmt: skip
+        """Flow's ``k.vehicle.add``: insert a car of group ``type_id`` on ``edge`` at the
+        next step, on the route of that edge; it joins the arrays when SUMO reports it
+        departed (a car SUMO cannot place yet waits, as an inflow's cars do).
+
+        Returns:
+            ``False`` (and nothing is done) if a car of that id is already in the network
+            or waiting to enter.
 
         Raises:
             ValueError: no route starts on ``edge``.
@@ -220,10 +225,13 @@ class VehicleCommands:
 
         if edge not in self.spec.routes and edge not in self.spec.route_choices:
             raise ValueError(f"no route starts on edge {edge!r}; known: {sorted(self.spec.routes)}")
+        if veh_id in self.table or veh_id in self.api.simulation.getPendingVehicles():
+            return False
         self.api.vehicle.add(
             veh_id, route_name(edge), typeID=str(type_id), depart="now",
             departLane=str(lane), departPos=str(pos), departSpeed=str(speed),
         )  # fmt: skip
+        return True
 
     def send_commands(self) -> None:
         """Send the buffered commands to SUMO and clear them."""
