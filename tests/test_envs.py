@@ -21,6 +21,7 @@ from flowrun.errors import ConfigError
 RING_WAVE = Path(__file__).resolve().parent.parent / "configs" / "ring_wave.yaml"
 BUILTIN = [
     "AccelEnv",
+    "BottleneckAccelEnv",
     "BottleneckDesiredVelocityEnv",
     "BottleneckEnv",
     "DesiredVelocityEnv",
