@@ -237,7 +237,7 @@ def _run(
         try:
             write_json(run_dir / "metrics.json", summary(status))
         except OSError as again:  # the disk is full: tracked_run reports the first error
-            log.warning("metrics.json not written: %s", again)
+            log.info("metrics.json not written: %s", again)
         raise
     env.close()
     write_json(run_dir / "metrics.json", summary(COMPLETE))
@@ -279,7 +279,7 @@ class _Bookkeeping:
             try:
                 self.save()
             except OSError as err:  # reported by the final write, or by what interrupted us
-                log.warning("metrics.json not updated: %s", err)
+                log.info("metrics.json not updated: %s", err)
 
 
 def write_gif(path: Path, frames: list[Any]) -> None:

@@ -419,4 +419,4 @@ def _fail(run_dir: Path, message: str, remove_if_empty: bool) -> None:
     try:
         mark_done(run_dir, FAILED, error=message.splitlines()[0] if message else "", exit_code=1)
     except OSError as err:
-        log.warning("could not mark %s failed: %s", run_dir, describe_os_error(err))
+        log.info("could not mark %s failed: %s", run_dir, describe_os_error(err))
