@@ -31,7 +31,7 @@ from flowrun.fastring.plan import RingPlan
 from flowrun.networks.base import Network
 
 #: simulation steps of controller noise drawn at once per ring
-NOISE_BLOCK = 512
+NOISE_BLOCK = 128
 
 
 @dataclass
@@ -61,19 +61,38 @@ class RingState:
         self.index()
 
     def index(self) -> None:
-        """Refresh the flat leader/follower indices (after the columns changed)."""
-        self.lead_flat = flat_index(self.leader)
-        self.follow_flat = flat_index(self.follower)
+        """Refresh the leader/follower indices (after the columns changed).
 
-    @property
-    def unwrapped(self) -> FloatArray:
-        """Entry position + distance driven, m (never wrapped)."""
-        return self.start + self.odo
+        When every ring has the same cyclic order (the usual case: cars placed in id order)
+        a gather is a copy of whole rows, much cheaper than an element-wise ``take``.
+        """
+        self.u = self.start + self.odo
+        first = self.leader[:, :1]
+        if self.leader.size and bool((self.leader == first).all()):
+            self.shared: tuple[IntArray, IntArray] | None = (
+                self.leader[:, 0].copy(), self.follower[:, 0].copy()
+            )
+        else:
+            self.shared = None
+            self.lead_flat = flat_index(self.leader)
+            self.follow_flat = flat_index(self.follower)
+
+    def of_leader(self, x: FloatArray) -> FloatArray:
+        """``x`` (``(N, B)``) of every car's leader."""
+        if self.shared is not None:
+            return x[self.shared[0]]
+        return np.take(x, self.lead_flat)
+
+    def of_follower(self, x: FloatArray) -> FloatArray:
+        """``x`` (``(N, B)``) of every car's follower."""
+        if self.shared is not None:
+            return x[self.shared[1]]
+        return np.take(x, self.follow_flat)
 
     @property
     def position(self) -> FloatArray:
-        """Ring position of every car, m (``get_x_by_id``)."""
-        return np.mod(self.unwrapped, self.length)
+        """Ring position of every car, m (``get_x_by_id``): ``(start + odo) mod length``."""
+        return np.mod(self.u, self.length)
 
     def take(self, cols: IntArray) -> RingState:
         """The rings ``cols`` as a state of their own (copies)."""
@@ -93,43 +112,51 @@ class RingState:
 
 
 class NoiseStreams:
-    """Each ring's controller-noise generator, drawn ahead in blocks (standard normals)."""
+    """Each ring's controller-noise generator, drawn ahead in blocks (standard normals).
+
+    Ring ``j``'s block is ``buf[j]`` (``NOISE_BLOCK`` steps x ``M`` draws, contiguous) and
+    ``cursor[j]`` the step it is at; a spent block is refilled from the ring's generator.
+    """
 
     def __init__(self, num_draws: int, num_rings: int) -> None:
         self.m = num_draws
         self.b = num_rings
         self.gens: list[np.random.Generator | None] = [None] * num_rings
-        self.buf = np.zeros((NOISE_BLOCK, num_draws, num_rings))
+        self.buf = np.zeros((num_rings, NOISE_BLOCK, num_draws))
         self.cursor = np.full(num_rings, NOISE_BLOCK, dtype=np.int64)
-        self._base = np.arange(num_draws)[:, None] * num_rings + np.arange(num_rings)
+        self._base = np.arange(num_draws)[:, None] + np.arange(num_rings) * (
+            NOISE_BLOCK * num_draws
+        )
 
     def restart(self, col: int, seed: int) -> None:
         """Ring ``col`` starts a new episode with a generator seeded ``seed``."""
         self.gens[col] = np.random.default_rng(seed)
         self.cursor[col] = NOISE_BLOCK
 
+    def _refill(self, cols: IntArray) -> None:
+        for j in cols.tolist():
+            gen = self.gens[j]
+            assert gen is not None, "restart() a ring before drawing its noise"
+            self.buf[j] = gen.standard_normal((NOISE_BLOCK, self.m))
+            self.cursor[j] = 0
+
     def draw(self, cols: IntArray | None = None) -> FloatArray:
         """One step of standard normals for the rings ``cols`` (all by default), ``(M, b)``."""
         if self.m == 0:
             n = self.b if cols is None else cols.size
             return np.zeros((0, n))
-        cur = self.cursor if cols is None else self.cursor[cols]
-        if cur.max() >= NOISE_BLOCK:
-            spent = np.flatnonzero(self.cursor >= NOISE_BLOCK)
-            if cols is not None:
-                spent = np.intersect1d(spent, cols)
-            for j in spent.tolist():
-                gen = self.gens[j]
-                assert gen is not None, "restart() a ring before drawing its noise"
-                self.buf[:, :, j] = gen.standard_normal((NOISE_BLOCK, self.m))
-                self.cursor[j] = 0
-            cur = self.cursor if cols is None else self.cursor[cols]
-        base = self._base if cols is None else self._base[:, cols]
-        z = np.take(self.buf, base + cur * (self.m * self.b))
         if cols is None:
+            if self.cursor.max() >= NOISE_BLOCK:
+                self._refill(np.flatnonzero(self.cursor >= NOISE_BLOCK))
+            z = np.take(self.buf, self._base + self.cursor * self.m)
             self.cursor += 1
-        else:
-            self.cursor[cols] += 1
+            return z
+        cur = self.cursor[cols]
+        if cur.max() >= NOISE_BLOCK:
+            self._refill(cols[cur >= NOISE_BLOCK])
+            cur = self.cursor[cols]
+        z = np.take(self.buf, self._base[:, cols] + cur * self.m)
+        self.cursor[cols] += 1
         return z
 
 
@@ -139,20 +166,21 @@ class RingPhysics:
 
     def __init__(self, plan: RingPlan) -> None:
         self.plan = plan
-        self._cache: dict[int, list[tuple[FloatArray, FloatArray, FloatArray]]] = {}
+        self._cache: dict[int, list[tuple[FloatArray, FloatArray, FloatArray, FloatArray]]] = {}
         self.rl = plan.rl_rows
         self.humans = [g for g in plan.groups if not g.is_rl]
         capped = plan.safe_cap.copy()
         capped[self.rl] = False
         self.capped_humans = np.flatnonzero(capped)
 
-    def _limits(self, b: int) -> list[tuple[FloatArray, FloatArray, FloatArray]]:
-        """Per human group: max accel, max decel and lengths repeated for ``b`` rings."""
+    def _limits(self, b: int) -> list[tuple[FloatArray, FloatArray, FloatArray, FloatArray]]:
+        """Per human group: max accel, max decel, lengths and speed limits, for ``b`` rings."""
         if b not in self._cache:
             p = self.plan
             self._cache[b] = [
                 (np.repeat(p.accel[g.start : g.stop], b), np.repeat(p.decel[g.start : g.stop], b),
-                 np.repeat(p.lengths[g.start : g.stop], b))
+                 np.repeat(p.lengths[g.start : g.stop], b),
+                 np.full((g.stop - g.start) * b, p.speed_limit))
                 for g in self.humans
             ]  # fmt: skip
         return self._cache[b]
@@ -180,19 +208,21 @@ class RingPhysics:
         dt, limit = p.dt, p.speed_limit
         b = s.length.size
         v = s.speed
-        vl = np.take(v, s.lead_flat)
-        fh = np.take(s.headway, s.follow_flat)
-        fv = np.take(v, s.follow_flat)
+        vl = s.of_leader(v)
+        fh = s.of_follower(s.headway)
+        fv = s.of_follower(v)
         nxt = np.empty_like(v)
         limits = self._limits(b)
         k = 0
         time = float(s.steps[0]) * dt if b else 0.0
-        for g, (max_accel, max_decel, length) in zip(self.humans, limits, strict=True):
+        for g, (max_accel, max_decel, length, speed_limit) in zip(
+            self.humans, limits, strict=True
+        ):
             sl = slice(g.start, g.stop)
             n = g.stop - g.start
             inputs = CarFollowingInputs(
                 v[sl].reshape(-1), s.headway[sl].reshape(-1), vl[sl].reshape(-1),
-                fh[sl].reshape(-1), fv[sl].reshape(-1), np.full(n * b, limit), dt, time,
+                fh[sl].reshape(-1), fv[sl].reshape(-1), speed_limit, dt, time,
                 max_accel, max_decel, length,
             )  # fmt: skip
             acc = np.asarray(g.controller._accel(inputs), dtype=np.float64).reshape(n, b)
@@ -219,8 +249,8 @@ class RingPhysics:
                 nxt[rl] = np.where(cap, np.minimum(target, v_safe), target)
         s.speed = nxt
         s.odo = s.odo + nxt * dt
-        u = s.start + s.odo
-        s.headway = np.take(u, s.lead_flat) - u + s.offset
+        u = s.u = s.start + s.odo
+        s.headway = s.of_leader(u) - u + s.offset
         s.steps = s.steps + 1
         crashed = np.asarray((s.headway < -NUMERICAL_EPS).any(axis=0))
         return crashed

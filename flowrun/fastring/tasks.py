@@ -54,17 +54,18 @@ class RingTask:
         s = rings.state
         assert s is not None
         p = self.plan
-        position = s.position
         if p.kind == "wave_po":
             if not p.rl_rows.size:
                 return np.zeros((rings.num_rings, 3), dtype=np.float32)
             rl = int(p.rl_rows[0])
             lead = s.leader[rl]
             cols = np.arange(rings.num_rings)
-            gap = np.mod(position[lead, cols] - position[rl], s.length)
+            x_av = np.mod(s.u[rl], s.length)
+            x_lead = np.mod(s.u[lead, cols], s.length)
+            gap = np.mod(x_lead - x_av, s.length)
             obs = partial_observation(s.speed[rl], s.speed[lead, cols], gap, p.max_length)
             return np.ascontiguousarray(obs.T, dtype=np.float32)
-        full = np.concatenate([s.speed / p.speed_limit, position / s.length])
+        full = np.concatenate([s.speed / p.speed_limit, s.position / s.length])
         np.maximum(full, 0.0, out=full)
         np.minimum(full, 1.0, out=full)
         return np.ascontiguousarray(full.T, dtype=np.float32)
