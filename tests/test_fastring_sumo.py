@@ -26,8 +26,14 @@ def sumo_rollout(cfg: Any, seed: int, actions: np.ndarray | None, steps: int) ->
     env = make_env(cfg)
     try:
         obs, _ = env.reset(seed=seed)
-        out: dict[str, list[Any]] = {"v": [env.k.vehicle.speed.copy()], "obs": [obs],
-                                     "x": [env.k.vehicle.position.copy()], "r": [], "end": []}  # fmt: skip
+        vk = env.k.vehicle
+        out: dict[str, list[Any]] = {
+            "v": [vk.speed.copy()],
+            "x": [vk.position.copy()],
+            "obs": [obs],
+            "r": [],
+            "end": [],
+        }
         for t in range(steps):
             obs, r, term, trunc, _ = env.step(None if actions is None else actions[t])
             out["v"].append(env.k.vehicle.speed.copy())
@@ -94,12 +100,10 @@ def test_rl_car_without_safe_speed_crashes_at_the_same_step_as_on_sumo() -> None
     assert int(np.argmax(fast["crash"])) == steps - 1
 
 
-@pytest.mark.parametrize(
-    "env_class", ["WaveAttenuationPOEnv", "WaveAttenuationEnv", "AccelEnv"]
-)
+@pytest.mark.parametrize("env_class", ["WaveAttenuationPOEnv", "WaveAttenuationEnv", "AccelEnv"])
 def test_observations_rewards_and_episode_end_equal_the_sumo_env(env_class: str) -> None:
-    accel = ["env.additional_params.target_velocity=10", "env.additional_params.sort_vehicles=false"]
-    extra = accel if env_class == "AccelEnv" else []
+    accel = ["target_velocity=10", "sort_vehicles=false"]
+    extra = [f"env.additional_params.{a}" for a in accel] if env_class == "AccelEnv" else []
     cfg = load("ring_wave", f"env.class={env_class}", "env.horizon=400", *extra)
     actions = np.random.default_rng(4).uniform(-1.5, 1.5, size=(400, 1))
     sumo = sumo_rollout(cfg, 11, actions, 400)

@@ -70,7 +70,8 @@ class RingState:
         first = self.leader[:, :1]
         if self.leader.size and bool((self.leader == first).all()):
             self.shared: tuple[IntArray, IntArray] | None = (
-                self.leader[:, 0].copy(), self.follower[:, 0].copy()
+                self.leader[:, 0].copy(),
+                self.follower[:, 0].copy(),
             )
         else:
             self.shared = None
@@ -215,9 +216,7 @@ class RingPhysics:
         limits = self._limits(b)
         k = 0
         time = float(s.steps[0]) * dt if b else 0.0
-        for g, (max_accel, max_decel, length, speed_limit) in zip(
-            self.humans, limits, strict=True
-        ):
+        for g, (max_accel, max_decel, length, speed_limit) in zip(self.humans, limits, strict=True):
             sl = slice(g.start, g.stop)
             n = g.stop - g.start
             inputs = CarFollowingInputs(
@@ -279,9 +278,7 @@ def draw_episode(
         network = cache[length]
     placed = network.start_positions(rng)
     starts = network.spec.edge_starts
-    start = np.array(
-        [starts[e] + lp for e, lp in zip(placed.edges, placed.lane_pos, strict=True)]
-    )
+    start = np.array([starts[e] + lp for e, lp in zip(placed.edges, placed.lane_pos, strict=True)])
     rng.integers(2**31 - 1)  # SUMO's own seed: nothing random in SUMO on this ring
     noise_seed = int(rng.integers(2**63 - 1))
     rng.integers(2**63 - 1)  # route choices: one route per edge on the ring

@@ -195,9 +195,7 @@ class RingVectorEnv(gymnasium.vector.VectorEnv):
         self, actions: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Step every ring (rings that end are reset in the same step)."""
-        obs, rewards, terminated, truncated, final, speed = self.episodes.step(
-            np.asarray(actions)
-        )
+        obs, rewards, terminated, truncated, final, speed = self.episodes.step(np.asarray(actions))
         ended = terminated | truncated
         info: dict[str, Any] = {"mean_speed": speed, "crash": terminated}
         if ended.any():

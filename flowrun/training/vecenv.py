@@ -117,9 +117,7 @@ def _numpy_vec_env(
     return venv
 
 
-def wrap_normalize(
-    venv: VecEnv, stats: Path | None, training: bool, gamma: float = 0.99
-) -> VecEnv:
+def wrap_normalize(venv: VecEnv, stats: Path | None, training: bool, gamma: float = 0.99) -> VecEnv:
     """Wrap in ``VecNormalize``: fresh, or with the statistics saved at ``stats``.
 
     Observations are normalised; rewards too while training (discounted with ``gamma``).
