@@ -55,6 +55,7 @@ _MSG = struct.Struct("<HIQQ")
 _CHUNK_FIXED = struct.Struct("<QQQI")
 _FOOTER = struct.Struct("<BQQQI")
 _KNOWN_OPS = frozenset(range(OP_HEADER, OP_DATA_END + 1))
+_SMALL_OPS = frozenset((OP_HEADER, OP_SCHEMA, OP_CHANNEL, OP_METADATA, OP_ATTACHMENT))
 _ZSTD_FIELD = b"\x04\x00\x00\x00zstd"  # a chunk header's compression string
 _ZSTD_AT = _HEAD.size + _CHUNK_FIXED.size  # where it stands in a chunk record
 MAX_CHUNK_BYTES = 1 << 31
@@ -64,6 +65,10 @@ MAX_CHUNK_BYTES = 1 << 31
 class BadRecord(Exception):
     """A record that cannot be what the writer wrote (internal; callers turn it into a
     :class:`~flowrun.recording.damage.Loss`)."""
+
+
+class CrcMismatch(BadRecord):
+    """A well-formed record whose content fails its CRC (its length can be trusted)."""
 
 
 class _Cursor:
@@ -166,12 +171,19 @@ def _read(f: IO[bytes], offset: int, n: int) -> bytes:
 
 
 # -- records -------------------------------------------------------------------------------
+def _done(cur: _Cursor) -> None:
+    """A scanned record's fields must fill it exactly (else its length field is damaged)."""
+    if cur.pos != cur.end:
+        raise BadRecord("the record's length does not match its fields")
+
+
 def parse_metadata(content: bytes) -> tuple[str, dict[str, str], bool | None]:
     """A Metadata record's name and entries, and whether its ``flowrun_crc32`` entry matched
     (``None`` when it has none: written by another tool or an older flowrun)."""
     cur = _Cursor(content)
     name = cur.string()
     entries = cur.string_map()
+    _done(cur)
     stored = entries.pop(CRC_KEY, None)
     if stored is None:
         return name, entries, None
@@ -187,8 +199,9 @@ def parse_attachment(content: bytes) -> tuple[str, bytes]:
     data = cur.take(cur.u64())
     fields_end = cur.pos
     crc = cur.u32()
+    _done(cur)
     if crc and zlib.crc32(content[:fields_end]) != crc:
-        raise BadRecord("attachment CRC mismatch")
+        raise CrcMismatch("attachment CRC mismatch")
     return name, data
 
 
@@ -196,16 +209,18 @@ def parse_schema(content: bytes) -> Schema:
     cur = _Cursor(content)
     sid = cur.u16()
     name, encoding = cur.string(), cur.string()
-    return Schema(id=sid, name=name, encoding=encoding, data=cur.take(cur.u32()))
+    data = cur.take(cur.u32())
+    _done(cur)
+    return Schema(id=sid, name=name, encoding=encoding, data=data)
 
 
 def parse_channel(content: bytes) -> Channel:
     cur = _Cursor(content)
     cid, sid = cur.u16(), cur.u16()
     topic, encoding = cur.string(), cur.string()
-    return Channel(
-        id=cid, schema_id=sid, topic=topic, message_encoding=encoding, metadata=cur.string_map()
-    )
+    metadata = cur.string_map()
+    _done(cur)
+    return Channel(id=cid, schema_id=sid, topic=topic, message_encoding=encoding, metadata=metadata)
 
 
 @dataclass(frozen=True)
@@ -399,7 +414,7 @@ def _add_side_record(st: Structure, opcode: int, content: bytes, offset: int) ->
     if opcode == OP_METADATA:
         name, entries, ok = parse_metadata(content)
         if ok is False:
-            raise BadRecord("metadata CRC mismatch")
+            raise CrcMismatch("metadata CRC mismatch")
         st.metadata[name] = entries
     else:
         name, data = parse_attachment(content)
@@ -420,50 +435,52 @@ def _scan(f: IO[bytes], st: Structure) -> None:
         if opcode == OP_CHUNK and end > size:
             _lost_tail(f, st, pos)
             break
-        if opcode not in _KNOWN_OPS or end > size:
-            after = _resync(f, pos + 1, size)
-            lo = last_chunk.end_ns / 1e9 if last_chunk else None
-            hi = after[1] / 1e9 if after else None
-            why = f"unreadable record (opcode 0x{opcode:02x}, {length} bytes)"
-            if after is None:
-                st.damage.add(Loss("tail", pos, f"{why}; no readable chunk after it", lo, hi))
-                break
-            st.damage.add(
-                Loss("chunk", pos, f"{why}; skipped {after[0] - pos} bytes", lo, hi, None)
-            )
-            pos = after[0]
-            continue
-        if opcode == OP_CHUNK:
+        well_formed = opcode in _KNOWN_OPS and end <= size
+        if well_formed and opcode == OP_CHUNK:
             try:
                 hdr = parse_chunk_header(_read(f, pos, 128), pos, size)
-            except BadRecord as err:
-                st.damage.add(Loss("chunk", pos, str(err)))
+            except BadRecord:
+                well_formed = False
             else:
                 last_chunk = ChunkRef(pos, hdr.length, hdr.start_ns, hdr.end_ns, False)
                 st.chunks.append(last_chunk)
-        elif opcode == OP_MESSAGE_INDEX and last_chunk is not None and length >= 6:
-            channel = _U16.unpack(_read(f, pos + 9, 2))[0]
-            last_chunk.message_indexes.setdefault(channel, pos)
-        elif opcode in (OP_FOOTER, OP_DATA_END):
+        elif well_formed and opcode == OP_MESSAGE_INDEX:
+            well_formed = _well_formed_index(f, pos, length)
+            if well_formed and last_chunk is not None:
+                channel = _U16.unpack(_read(f, pos + 9, 2))[0]
+                last_chunk.message_indexes.setdefault(channel, pos)
+        elif well_formed and opcode in (OP_FOOTER, OP_DATA_END):
             st.good_bytes = end
             if opcode == OP_DATA_END and not any(x.part == "index" for x in st.damage.losses):
                 st.damage.add(Loss("index", pos, "the summary after Data End is unusable"))
             return
-        elif opcode in (OP_HEADER, OP_SCHEMA, OP_CHANNEL, OP_METADATA, OP_ATTACHMENT):
-            _scan_small_record(f, st, opcode, pos, length)
+        elif well_formed and opcode in _SMALL_OPS:
+            well_formed = _scan_small_record(f, st, opcode, pos, length)
+        if not well_formed:
+            after = _resync(f, pos + 1, size)
+            if after is None:
+                lo = last_chunk.end_ns / 1e9 if last_chunk else None
+                why = f"unreadable record (opcode 0x{opcode:02x}); no readable chunk after it"
+                st.damage.add(Loss("tail", pos, why, lo, None))
+                break
+            _skipped(st, pos, after, last_chunk, opcode)
+            pos = after[0]
+            continue
         st.good_bytes = pos = end
     if not any(x.part in ("tail", "index") for x in st.damage.losses):
         st.damage.add(Loss("unfinished", size, "no footer: the log was not closed", frames=0))
 
 
-def _scan_small_record(f: IO[bytes], st: Structure, opcode: int, pos: int, length: int) -> None:
+def _scan_small_record(f: IO[bytes], st: Structure, opcode: int, pos: int, length: int) -> bool:
+    """Read a non-chunk record met by the scan; returns whether its length can be trusted
+    (a bad CRC in a well-formed record costs that record only)."""
+    part = {OP_METADATA: "metadata", OP_ATTACHMENT: "attachment"}.get(opcode, "record")
     try:
-        if length > 1 << 30:
-            raise BadRecord("record too large")
         content = _read(f, pos + 9, length)
+        cur = _Cursor(content)
         if opcode == OP_HEADER:
-            cur = _Cursor(content)
             st.profile, st.library = cur.string(), cur.string()
+            _done(cur)
         elif opcode == OP_SCHEMA:
             sch = parse_schema(content)
             st.schemas[sch.id] = sch
@@ -472,9 +489,33 @@ def _scan_small_record(f: IO[bytes], st: Structure, opcode: int, pos: int, lengt
             st.channels[ch.id] = ch
         else:
             _add_side_record(st, opcode, content, pos)
-    except BadRecord as err:
-        part = {OP_METADATA: "metadata", OP_ATTACHMENT: "attachment"}.get(opcode, "record")
+    except CrcMismatch as err:
         st.damage.add(Loss(part, pos, str(err)))
+        return True
+    except BadRecord as err:
+        st.damage.add(Loss(part, pos, str(err)))
+        return False
+    return True
+
+
+def _well_formed_index(f: IO[bytes], pos: int, length: int) -> bool:
+    """Whether the Message Index record at ``pos`` has a length its entries fill."""
+    if length < 6:
+        return False
+    nbytes = _U32.unpack(_read(f, pos + 11, 4))[0]
+    return bool(nbytes + 6 == length and nbytes % 16 == 0)
+
+
+def _skipped(
+    st: Structure, pos: int, after: tuple[int, int], last_chunk: ChunkRef | None, opcode: int
+) -> None:
+    """Report the bytes from a damaged record at ``pos`` to the next chunk."""
+    why = f"unreadable record (opcode 0x{opcode:02x}); skipped {after[0] - pos} bytes"
+    if last_chunk is None:  # before the first chunk: schemas, channels, metadata, no data
+        st.damage.add(Loss("records", pos, f"{why} to the first chunk", frames=0))
+    else:
+        lo, hi = last_chunk.end_ns / 1e9, after[1] / 1e9
+        st.damage.add(Loss("chunk", pos, f"{why}; data between them may be lost", lo, hi))
 
 
 def _lost_tail(f: IO[bytes], st: Structure, pos: int) -> None:

@@ -142,7 +142,11 @@ class McapLog:
                 if self._vehicles_ok():
                     return
         # McapRecorder (library "flowrun") registers vehicles = 1 and stats = 2 first
-        if (self._st.profile, self._st.library) == (PROFILE, "flowrun") and self.damage:
+        recorder = (self._st.profile, self._st.library) == (PROFILE, "flowrun")
+        header_lost = self._st.profile == "" and any(
+            x.part == "records" for x in self.damage.losses
+        )
+        if (recorder or header_lost) and self.damage:
             schemas, channels = _default_channels()
             self._schemas.update(schemas)
             self._channels.update(channels)
