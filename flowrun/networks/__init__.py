@@ -4,6 +4,7 @@ from flowrun.networks.base import Network, NetworkSpec, StartPositions
 from flowrun.networks.bottleneck import BottleneckNetwork
 from flowrun.networks.figure_eight import FigureEightNetwork
 from flowrun.networks.highway import HighwayNetwork
+from flowrun.networks.highway_ramps import HighwayRampsNetwork
 from flowrun.networks.merge import MergeNetwork
 from flowrun.networks.ring import ADDITIONAL_NET_PARAMS, RingNetwork
 from flowrun.networks.template import TemplateNetwork
@@ -13,6 +14,7 @@ __all__ = [
     "BottleneckNetwork",
     "FigureEightNetwork",
     "HighwayNetwork",
+    "HighwayRampsNetwork",
     "MergeNetwork",
     "Network",
     "NetworkSpec",

@@ -10,6 +10,7 @@ from flowrun.networks.base import Network
 from flowrun.networks.bottleneck import BottleneckNetwork
 from flowrun.networks.figure_eight import FigureEightNetwork
 from flowrun.networks.highway import HighwayNetwork
+from flowrun.networks.highway_ramps import HighwayRampsNetwork
 from flowrun.networks.merge import MergeNetwork
 from flowrun.networks.ring import RingNetwork, check_ring_fits
 from flowrun.networks.template import TemplateNetwork
@@ -24,6 +25,7 @@ NETWORKS: dict[str, type[Network]] = {
     "template": TemplateNetwork,
     "traffic_light_grid": TrafficLightGridNetwork,
     "bottleneck": BottleneckNetwork,
+    "highway_ramps": HighwayRampsNetwork,
 }
 _ALIASES = {
     "loop": "ring",
@@ -45,6 +47,8 @@ _ALIASES = {
     "SimpleGridScenario": "traffic_light_grid",
     "BottleneckNetwork": "bottleneck",
     "BottleneckScenario": "bottleneck",
+    "HighwayRampsNetwork": "highway_ramps",
+    "HighwayRampsScenario": "highway_ramps",
 }
 
 

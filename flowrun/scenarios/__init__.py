@@ -1,11 +1,13 @@
 """Flow's old names for networks (``flow.scenarios``): ``LoopScenario`` is the ring,
 ``Figure8Scenario``/``FigureEightScenario`` the figure eight, ``MergeScenario`` the merge and
-``HighwayScenario`` the highway, ``BottleneckScenario`` the bottleneck."""
+``HighwayScenario`` the highway, ``BottleneckScenario`` the bottleneck and
+``HighwayRampsScenario`` the highway with ramps."""
 
 from flowrun.networks.base import Network
 from flowrun.networks.bottleneck import BottleneckScenario
 from flowrun.networks.figure_eight import Figure8Scenario, FigureEightScenario
 from flowrun.networks.highway import HighwayScenario
+from flowrun.networks.highway_ramps import HighwayRampsScenario
 from flowrun.networks.merge import MergeScenario
 from flowrun.networks.ring import LoopScenario
 
@@ -16,6 +18,7 @@ __all__ = [
     "BottleneckScenario",
     "Figure8Scenario",
     "FigureEightScenario",
+    "HighwayRampsScenario",
     "HighwayScenario",
     "LoopScenario",
     "MergeScenario",
