@@ -1,0 +1,206 @@
+"""RLlib training (``train.backend: rllib``), real and short: PPO on the ring with 2 env
+runners and on the multi-agent traffic-light grid, each for 2 iterations on one local Ray
+instance; a checkpoint, resume continuing RLlib's iteration counter, evaluation of a checkpoint
+to MCAP logs read back; bad settings as one-line errors (no Ray needed for those)."""
+
+from __future__ import annotations
+
+import json
+import logging
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+pytest.importorskip("ray.rllib", reason="needs the rllib extra: pip install 'flowrun[rllib]'")
+pytest.importorskip("pettingzoo", reason="needs the multiagent extra")
+
+import ray
+
+from flowrun.config.loader import load_config
+from flowrun.errors import ConfigError, TrainingError
+from flowrun.recording.reader import open_log
+from flowrun.training.rllib import INSTALL_HINT, evaluate_rllib, require_ray, train_rllib
+from flowrun.training.rllib.cluster import check_reachable, host_port, resolve_address
+from flowrun.training.rllib.envs import policy_mapping, probe_agents
+from flowrun.training.rllib.options import check_train_config
+from flowrun.training.trainer import resume_config
+
+pytestmark = [pytest.mark.rllib]
+
+CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+TINY = "train.rllib={train_batch_size_per_learner: 200, minibatch_size: 100, num_epochs: 1}"
+RING = [
+    "env.horizon=100", "env.warmup_steps=10", "train.total_timesteps=400",
+    "train.num_env_runners=2", "train.eval_freq=200", "train.eval_episodes=1",
+    "train.checkpoint_freq=200", TINY,
+]  # fmt: skip
+GRID = [
+    "env.horizon=50", "train.total_timesteps=200", "train.num_env_runners=1",
+    "train.eval_freq=0", "train.checkpoint_freq=200", TINY,
+]  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def local_ray() -> Iterator[None]:
+    """One local Ray for the module (train_rllib uses it and leaves it running)."""
+    ray.init(num_cpus=2, include_dashboard=False, logging_level=logging.WARNING)
+    yield
+    ray.shutdown()
+
+
+@pytest.fixture(scope="module")
+def ring_run(local_ray: None, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    cfg = load_config(CONFIGS / "rllib_ring.yaml", RING)
+    seen: list[tuple[int, int]] = []
+    result = train_rllib(
+        cfg, out=tmp_path_factory.mktemp("runs"), argv=["flowrun", "train"],
+        progress=lambda done, total, _: seen.append((done, total)),
+    )  # fmt: skip
+    assert result.status == "complete" and result.timesteps == 400
+    assert seen == [(200, 400), (400, 400)]
+    return result.run_dir
+
+
+def _lines(path: Path) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in path.read_text().splitlines()]
+
+
+# ---------------------------------------------------------------- training, single agent
+def test_single_agent_run_folder(ring_run: Path) -> None:
+    for name in ("config.yaml", "command.txt", "versions.json", "metrics.json"):
+        assert (ring_run / name).is_file(), name
+    metrics = json.loads((ring_run / "metrics.json").read_text())
+    assert metrics["backend"] == "rllib" and metrics["status"] == "complete"
+    assert (metrics["iterations"], metrics["timesteps"], metrics["num_env_runners"]) == (2, 400, 2)
+    assert json.loads((ring_run / "versions.json").read_text())["ray"] == ray.__version__
+    state = json.loads((ring_run / "checkpoints" / "state.json").read_text())
+    assert (state["iteration"], state["timesteps"]) == (2, 400)
+    assert (ring_run / "checkpoints" / "iter_000001").is_dir()  # checkpoint_freq=200 steps
+    assert (ring_run / "final_checkpoint" / "learner_group").is_dir()
+    progress = _lines(ring_run / "progress.jsonl")
+    assert [p["iteration"] for p in progress] == [1, 2]
+    # the best checkpoint is the one of the best evaluation (evaluated every iteration)
+    scores = [p["eval_return_mean"] for p in progress]
+    assert all(s is not None for s in scores)
+    assert metrics["best_eval_return"] == max(scores)
+    assert (ring_run / "best_checkpoint" / "learner_group").is_dir()
+    assert list((ring_run / "tensorboard").glob("events.out.tfevents.*"))
+
+
+def test_resume_continues_the_iteration_counter(ring_run: Path) -> None:
+    cfg = resume_config(ring_run, ["train.total_timesteps=600"])
+    result = train_rllib(cfg, resume_dir=ring_run, argv=["flowrun", "train", "--resume"])
+    assert (result.status, result.timesteps, result.resumed_from) == ("complete", 600, 400)
+    progress = _lines(ring_run / "progress.jsonl")
+    assert [(p["iteration"], p["timesteps"]) for p in progress] == [(1, 200), (2, 400), (3, 600)]
+    metrics = json.loads((ring_run / "metrics.json").read_text())
+    assert (metrics["iterations"], metrics["resumed_from"]) == (3, 400)
+    assert len((ring_run / "command.txt").read_text().splitlines()) == 2
+    assert (ring_run / "config.before_400.yaml").is_file()  # the total changed
+
+
+def test_evaluate_a_checkpoint_to_mcap(ring_run: Path) -> None:
+    first = evaluate_rllib(ring_run, episodes=1, model="checkpoints/iter_000002")
+    assert first.model == ring_run / "checkpoints" / "iter_000002"
+    assert [p.name for p in first.logs] == ["policy_0.mcap", "baseline_0.mcap"]
+    policy, baseline = (open_log(p) for p in first.logs)
+    assert policy.frame_count == baseline.frame_count == 111  # reset + 10 warm-up + 100 steps
+    rl_accel = [f.accel_cmd[f.is_rl][0] for f in policy.frames() if f.step > 10]
+    assert np.all(np.abs(rl_accel) <= 1.0 + 1e-9)  # the policy's commands, in the action box
+    assert np.ptp(rl_accel) > 0  # ... that change with the observation
+    speeds = [f.speed for f in policy.frames()]
+    assert not np.allclose(speeds[-1], [f.speed for f in baseline.frames()][-1])
+    metrics = json.loads((first.out_dir / "metrics.json").read_text())
+    assert metrics["backend"] == "rllib" and metrics["policy"][0]["collisions"] == 0
+    # deterministic policy, same seeds: the same episode again
+    again = evaluate_rllib(ring_run, episodes=1, model="checkpoints/iter_000002")
+    assert again.policy[0].episode_return == first.policy[0].episode_return
+    assert [f.speed.tolist() for f in open_log(again.logs[0]).frames()] == [
+        s.tolist() for s in speeds
+    ]
+
+
+# ---------------------------------------------------------------- training, multi-agent
+def test_multi_agent_grid_trains_and_evaluates(
+    local_ray: None, tmp_path: Path
+) -> None:
+    cfg = load_config(CONFIGS / "multiagent_grid.yaml", GRID)
+    result = train_rllib(cfg, out=tmp_path, argv=["flowrun", "train"])
+    run = result.run_dir
+    assert (result.status, result.timesteps) == ("complete", 200)
+    mapping = json.loads((run / "policies.json").read_text())
+    assert mapping == {f"center{i}": "shared" for i in range(9)}
+    modules = run / "final_checkpoint" / "learner_group" / "learner" / "rl_module"
+    assert (modules / "shared").is_dir()
+    evaluation = evaluate_rllib(run, episodes=1, model="final")
+    log = open_log(evaluation.logs[0])
+    assert log.frame_count == 51 and log.has_signals
+    states = [s for frame in log.signals() for s in frame.states]
+    assert any("y" in s for s in states)  # the lights switched on the policy's requests
+    assert evaluation.policy[0].collisions == 0
+
+
+# ---------------------------------------------------------------- settings, no training
+def test_policy_mapping_modes() -> None:
+    ring = load_config(CONFIGS / "multiagent_ring.yaml")
+    agents = probe_agents(ring)
+    assert agents == ["rl_0", "rl_1"]
+    assert policy_mapping(ring, agents, "shared") == {"rl_0": "shared", "rl_1": "shared"}
+    assert policy_mapping(ring, agents, "group") == {"rl_0": "rl", "rl_1": "rl"}
+    assert policy_mapping(ring, agents, "agent") == {"rl_0": "rl_0", "rl_1": "rl_1"}
+    merge = load_config(CONFIGS / "multiagent_merge.yaml")
+    merge_agents = probe_agents(merge)
+    assert merge_agents is not None and len(merge_agents) == 43
+    groups = set(policy_mapping(merge, merge_agents, "group").values())
+    assert groups == {"rl"}  # inflow AVs belong to their inflow's vehicle type
+    assert probe_agents(load_config(CONFIGS / "rllib_ring.yaml")) is None
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ("train.rllib={lrr: 0.1}", "unknown RLlib PPO option 'lrr' (did you mean 'lr'?)"),
+        ("train.rllib={num_env_runners: 3}", "sets 'num_env_runners' from train.num_env_runners"),
+        ("train.rllib={num_envs_per_env_runner: 2}", "one simulation per process"),
+        ("train.rllib={lr: fast}", "expected a number, got 'fast'"),
+        ("train.rllib={num_epochs: 2.5}", "expected a whole number"),
+        ("train.algorithm=SAC", "trains PPO only"),
+        ("train.policies=shard", "did you mean 'shared'"),
+        ("train.hyperparams={n_steps: 10}", "stable-baselines3 names"),
+    ],
+)
+def test_bad_settings_are_one_line_config_errors(override: str, message: str) -> None:
+    cfg = load_config(CONFIGS / "rllib_ring.yaml", [override])
+    assert cfg.train is not None
+    with pytest.raises(ConfigError) as err:
+        check_train_config(cfg.train)
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_flows_lambda_name_is_rlliibs_lambda_() -> None:
+    cfg = load_config(CONFIGS / "rllib_ring.yaml")
+    assert cfg.train is not None
+    sections = check_train_config(cfg.train)
+    assert sections["training"]["lambda_"] == 0.97
+    assert sections["rl_module"]["model_config"] == {"fcnet_hiddens": [64, 64]}
+
+
+def test_unreachable_ray_address_fails_fast(monkeypatch: pytest.MonkeyPatch) -> None:
+    assert host_port("ray://head:10001") == ("head", 10001)
+    assert host_port("10.0.0.5") == ("10.0.0.5", 6379)
+    monkeypatch.setenv("RAY_ADDRESS", "127.0.0.1:1")
+    assert resolve_address(None) == "127.0.0.1:1"
+    assert resolve_address("auto") == "auto"
+    with pytest.raises(TrainingError, match=r"cannot reach the Ray cluster at 127\.0\.0\.1:1"):
+        check_reachable(resolve_address(None) or "", timeout=2.0)
+
+
+def test_missing_extra_names_the_install_command(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "ray.rllib", None)
+    with pytest.raises(TrainingError) as err:
+        require_ray()
+    assert INSTALL_HINT in str(err.value)
