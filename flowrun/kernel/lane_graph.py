@@ -2,8 +2,8 @@
 
 Leaders past a lane's end can be found without asking SUMO where the road is unambiguous:
 the lane has one successor (a junction-internal lane, then the next edge's lane), nothing
-merges into or crosses that path, and the car's route goes there. :class:`LaneGraph` holds
-those facts per lane key (see :class:`~flowrun.kernel.lanes.LaneTable`).
+merges into that path (crossings do not matter ahead), and the car's route goes there.
+:class:`LaneGraph` holds those facts per lane key (see :class:`~flowrun.kernel.lanes.LaneTable`).
 """
 
 from __future__ import annotations
@@ -21,9 +21,6 @@ class LaneGraph:
 
     Attributes:
         succ, pred: per lane key, the unique successor / predecessor key or -1.
-        clear: per lane key, the lane neither merges nor crosses (an internal lane without
-            internal foes; every normal lane). Looking back, SUMO's follower search stops at
-            such lanes; looking ahead only merges matter (``pred`` not unique).
         next_edge: per lane key, the edge index of the first normal lane reached through
             the successors (-1 if ambiguous).
     """
@@ -43,7 +40,6 @@ class LaneGraph:
                 preds[b].append(a)
         self.succ: IntArray = np.array([s[0] if len(s) == 1 else -1 for s in succs], np.int64)
         self.pred: IntArray = np.array([p[0] if len(p) == 1 else -1 for p in preds], np.int64)
-        self.clear = ~lanes.with_foes
         self.internal = lanes.internal
         self.length = lanes.length
         self.edge_index = lanes.edge_index
@@ -51,7 +47,6 @@ class LaneGraph:
         # the same as Python lists: the walks read single entries, where lists are faster
         self.succ_l: list[int] = self.succ.tolist()
         self.pred_l: list[int] = self.pred.tolist()
-        self.clear_l: list[bool] = self.clear.tolist()
         self.internal_l: list[bool] = self.internal.tolist()
         self.length_l: list[float] = self.length.tolist()
         self.edge_index_l: list[int] = self.edge_index.tolist()

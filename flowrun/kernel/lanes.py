@@ -34,11 +34,9 @@ class LaneTable:
     """
 
     def __init__(self, lanes: list[tuple[str, float, float]], links: dict[str, list[Any]],
-                 spec: NetworkSpec, foes: set[str] | None = None) -> None:  # fmt: skip
+                 spec: NetworkSpec) -> None:  # fmt: skip
         self.key = {lane: i for i, (lane, _, _) in enumerate(lanes)}
         self.links = links
-        #: junction-internal lanes that cross or merge with another internal lane
-        self.with_foes = np.array([lane in (foes or ()) for lane, _, _ in lanes], dtype=bool)
         edges: dict[str, int] = {}
         edge_index, lane_index = [], []
         for lane, _, _ in lanes:
@@ -71,8 +69,7 @@ class LaneTable:
         ids = sorted(lane.getIDList())
         lanes = [(i, float(lane.getLength(i)), float(lane.getMaxSpeed(i))) for i in ids]
         links = {i: list(lane.getLinks(i)) for i in ids}
-        foes = {i for i in ids if i.startswith(":") and lane.getInternalFoes(i)}
-        return cls(lanes, links, spec, foes)
+        return cls(lanes, links, spec)
 
     def next_lanes(self, edge: str, lane: int) -> list[tuple[str, int]]:
         """Flow's ``next_edge``: where lane ``lane`` of ``edge`` leads, as (edge, lane) pairs;

@@ -2,13 +2,18 @@
 
 Within a lane, cars are sorted by lane position (:func:`leaders_by_lane`). Only the frontmost
 car of each occupied lane needs a look past the lane's end, along its route and through
-junction-internal lanes, and only the rearmost car a look back. Where the road is
-unambiguous (one successor, nothing merging or crossing, the route going there, the next
-car within the look-ahead), the :class:`~flowrun.kernel.lane_graph.LaneGraph` answers with
-the rearmost car of the next occupied lane; elsewhere SUMO's ``getLeader`` (gap minus the
-ego's ``minGap``, added back) and ``getFollower`` (gap minus the *follower's* ``minGap``)
-do. Both give the same cars and gaps (``tests/test_open_kernel.py`` compares every car with
+junction-internal lanes. Where the road is unambiguous (one successor, nothing merging, the
+route going there, the next car within the look-ahead), the
+:class:`~flowrun.kernel.lane_graph.LaneGraph` answers with the rearmost car of the next
+occupied lane; elsewhere SUMO's ``getLeader`` (gap minus the ego's ``minGap``, added back)
+does. Both give the same cars and gaps (``tests/test_open_kernel.py`` compares every car with
 SUMO on every network).
+
+A car's follower is, as in Flow, the car whose leader it is (Flow's kernel sets
+``follower`` of each car's leader); where several cars have the same leader (two lanes
+merging), the nearest one, and its headway is the tailway. SUMO's ``getFollower`` is not
+asked: it can name a car whose leader is someone else (a route that leaves before the
+merge) or look less far back.
 """
 
 from __future__ import annotations
@@ -44,23 +49,21 @@ class Following:
     def __init__(
         self,
         get_leader: Neighbour,
-        get_follower: Neighbour,
         graph: LaneGraph | None = None,
         edge_pos: Mapping[str, int] | None = None,
     ) -> None:
         self._get_leader = get_leader
-        self._get_follower = get_follower
         self.graph = graph
         self._edge_pos = edge_pos or {}
 
     @classmethod
     def of(cls, api: Any, graph: LaneGraph | None = None,
            edge_pos: Mapping[str, int] | None = None) -> Following:  # fmt: skip
-        """Bound to ``libsumo``'s compiled calls (or ``traci``'s)."""
+        """Bound to ``libsumo``'s compiled ``getLeader`` (or ``traci``'s)."""
         raw = getattr(api, "_libsumo", None)
         if raw is not None and hasattr(raw, "vehicle_getLeader"):
-            return cls(raw.vehicle_getLeader, raw.vehicle_getFollower, graph, edge_pos)
-        return cls(api.vehicle.getLeader, api.vehicle.getFollower, graph, edge_pos)
+            return cls(raw.vehicle_getLeader, graph, edge_pos)
+        return cls(api.vehicle.getLeader, graph, edge_pos)
 
     def compute(
         self,
@@ -78,20 +81,17 @@ class Following:
             routes: each car's route by id (lets the lane graph answer; SUMO otherwise).
         """
         lengths, min_gaps, ids = pop.lengths, pop.min_gaps, pop.ids
-        leader, follower, headway, fronts, rears = leaders_by_lane(lane_key, lane_pos, lengths)
-        has_follower = follower >= 0
-        tailway = np.where(has_follower, headway[np.where(has_follower, follower, 0)], np.inf)
+        leader, _, headway, fronts, rears = leaders_by_lane(lane_key, lane_pos, lengths)
         graph = self.graph if routes is not None else None
         walk = None
         if graph is not None and fronts.size:
             keys = lane_key.tolist()
-            rear_list, front_list = rears.tolist(), fronts.tolist()
+            rear_list = rears.tolist()
             walk = _Walk(
                 graph, keys, lane_pos.tolist(), lengths.tolist(),
                 dict(zip([keys[r] for r in rear_list], rear_list, strict=True)),
-                dict(zip([keys[r] for r in front_list], front_list, strict=True)),
             )  # fmt: skip
-        get_leader, get_follower = self._get_leader, self._get_follower
+        get_leader = self._get_leader
         for r in fronts.tolist():
             if walk is not None and routes is not None:
                 answer = walk.ahead(r, self._route_next(ids[r], walk.key[r], routes))
@@ -103,18 +103,7 @@ class Following:
             if found and found[0] and found[0] in pop:
                 leader[r] = pop.row(found[0])
                 headway[r] = float(found[1]) + float(min_gaps[r])
-        for r in rears.tolist():
-            if walk is not None:
-                answer = walk.behind(r)
-                if answer is not _ASK:
-                    if answer is not None:
-                        follower[r], tailway[r] = answer
-                    continue
-            found = get_follower(ids[r], LOOKAHEAD)
-            if found and found[0] and found[0] in pop:
-                j = pop.row(found[0])
-                follower[r] = j
-                tailway[r] = float(found[1]) + float(min_gaps[j])
+        follower, tailway = followers_of(leader, headway)
         return leader, follower, headway, tailway
 
     def _route_next(self, veh_id: str, key: int, routes: Mapping[str, tuple[str, ...]]) -> int:
@@ -142,17 +131,15 @@ _ASK: Any = _Ask()
 
 
 class _Walk:
-    """Walks the lane graph from a lane's front (rear) car to the next car ahead (behind)."""
+    """Walks the lane graph from a lane's front car to the next car ahead."""
 
     def __init__(self, graph: LaneGraph, lane_key: list[int], lane_pos: list[float],
-                 lengths: list[float], rear_of: dict[int, int],
-                 front_of: dict[int, int]) -> None:  # fmt: skip
+                 lengths: list[float], rear_of: dict[int, int]) -> None:  # fmt: skip
         self.g = graph
         self.key = lane_key
         self.pos = lane_pos
         self.lengths = lengths
         self.rear_of = rear_of
-        self.front_of = front_of
 
     def ahead(self, r: int, want: int) -> Found:
         """The leader of front car ``r`` and the gap, ``None``, or :data:`_ASK`."""
@@ -182,22 +169,29 @@ class _Walk:
             cur = nxt
         return _ASK
 
-    def behind(self, r: int) -> Found:
-        """The follower of rear car ``r`` and the gap, ``None``, or :data:`_ASK`."""
-        g, pos = self.g, self.pos
-        succ, pred, internal, clear = g.succ_l, g.pred_l, g.internal_l, g.clear_l
-        cur = self.key[r]
-        dist = pos[r] - self.lengths[r]  # from this car's rear to the lane start
-        for _ in range(MAX_HOPS):
-            prev = pred[cur]
-            if prev < 0 or not clear[prev] or succ[prev] != cur:
-                return _ASK
-            j = self.front_of.get(prev, -1)
-            if j >= 0:
-                gap = dist + g.length_l[prev] - pos[j]
-                return (j, gap) if gap <= LOOKAHEAD else _ASK
-            if not internal[prev]:
-                return _ASK  # the previous edge's lane is empty: SUMO looks further back
-            dist += g.length_l[prev]
-            cur = prev
-        return _ASK
+
+def followers_of(leader: IntArray, headway: FloatArray) -> tuple[IntArray, FloatArray]:
+    """Every car's follower and tailway from everyone's leader and headway (Flow's rule).
+
+    The follower of a car is the car whose leader it is; of several such cars (lanes
+    merging), the one with the smallest headway (the lower row on a tie).
+
+    Args:
+        leader: row of each car's leader, -1 for none.
+        headway: gap from each car's front bumper to its leader's rear bumper, m.
+
+    Returns:
+        follower rows (-1 for none) and tailways (m, ``inf`` for none).
+    """
+    n = leader.shape[0]
+    follower = np.full(n, -1, dtype=np.int64)
+    tailway = np.full(n, np.inf)
+    led = np.flatnonzero(leader >= 0)
+    if led.size:
+        order = led[np.lexsort((headway[led], leader[led]))]
+        lead_of = leader[order]
+        first = np.ones(order.size, dtype=bool)
+        first[1:] = lead_of[1:] != lead_of[:-1]
+        follower[lead_of[first]] = order[first]
+        tailway[lead_of[first]] = headway[order[first]]
+    return follower, tailway
