@@ -169,7 +169,7 @@ def test_a_run_never_overwrites_a_folder_of_the_same_second_and_seed(tmp_path: P
 def test_two_processes_started_together_write_two_folders_with_the_same_results(
     tmp_path: Path,
 ) -> None:
-    cmd = [str(FLOWRUN), "baseline", str(SUGIYAMA), "--out", str(tmp_path), "--steps", "100"]
+    cmd = [str(FLOWRUN), "baseline", str(SUGIYAMA), "--out", str(tmp_path), "--steps", "20"]
     procs = [subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
              for _ in range(2)]  # fmt: skip
     for proc in procs:

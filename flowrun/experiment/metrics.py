@@ -20,7 +20,8 @@ class RunMetrics:
         run: run index.
         steps: simulation steps logged (initial state and warm-up included).
         duration: simulated time at the last step (SUMO starts at 0), s.
-        mean_speed: mean over steps of the mean speed of all vehicles.
+        mean_speed: mean over steps of the mean speed of all vehicles (steps without vehicles
+            left out; ``nan``, written ``null``, when no step had any).
         speed_std: mean over steps of the speed standard deviation across vehicles.
         min_speed: lowest speed of any vehicle at any step.
         max_speed: highest speed of any vehicle at any step.
@@ -100,15 +101,24 @@ class RunAccumulator:
             run=run,
             steps=self.steps,
             duration=float(self.time),
-            mean_speed=float(np.mean(mean)),
-            speed_std=float(np.mean(std)),
-            min_speed=float(self.min_speed),
-            max_speed=float(self.max_speed),
-            last_half_mean_speed=float(np.mean(mean[half:])),
-            last_half_speed_std=float(np.mean(std[half:])),
+            mean_speed=_mean_of_occupied(mean),
+            speed_std=_mean_of_occupied(std),
+            min_speed=float(self.min_speed) if math.isfinite(self.min_speed) else math.nan,
+            max_speed=float(self.max_speed) if math.isfinite(self.max_speed) else math.nan,
+            last_half_mean_speed=_mean_of_occupied(mean[half:]),
+            last_half_speed_std=_mean_of_occupied(std[half:]),
             episode_return=float(episode_return),
             collisions=self.collisions,
             teleports=self.teleports,
             departed=self.departed,
             arrived=self.arrived,
         )
+
+
+def _mean_of_occupied(values: np.ndarray) -> float:
+    """Mean over the steps that had vehicles (a step without any is ``nan``); ``nan`` if none.
+
+    ``metrics.json`` writes ``nan`` as ``null``.
+    """
+    occupied = values[~np.isnan(values)]
+    return float(np.mean(occupied)) if occupied.size else math.nan
