@@ -191,7 +191,7 @@ def test_registry_knows_flows_class_names_and_lists_parameters() -> None:
     assert network_class("ring") is RingNetwork
     table = {name: (cls, params) for name, cls, params in network_table()}
     assert set(table) == {"ring", "figure_eight", "merge", "highway", "template",
-                          "traffic_light_grid"}  # fmt: skip
+                          "traffic_light_grid", "bottleneck", "highway_ramps"}  # fmt: skip
     assert table["highway"][1]["boundary_cell_length"] == 500
     assert table["merge"][0] == "MergeNetwork"
 
