@@ -245,3 +245,40 @@ def test_a_bad_chunk_in_the_middle_costs_that_chunk_only(intact: Intact, tmp_pat
     assert missing == list(range(missing[0], missing[-1] + 1))  # one contiguous gap
     assert frames[0] == 0 and frames[-1] == STEPS - 1  # before and after it: read
     assert loss.start_s <= missing[0] * 0.1 + 1e-9 and missing[-1] * 0.1 <= loss.end_s + 1e-9
+
+
+def _copy_with_data_crc(src: Path, dst: Path) -> None:
+    """Rewrite a flowrun log with the mcap library, which can store the data section CRC."""
+    from mcap.writer import Writer
+
+    log = open_log(src)
+    with open(dst, "wb") as stream:
+        writer = Writer(stream, enable_data_crcs=True)
+        writer.start(profile="flowrun", library="mcap-python")
+        ids: dict[int, int] = {}
+        for sch, ch, msg in log.messages():
+            if ch.id not in ids:
+                assert sch is not None
+                sid = writer.register_schema(sch.name, sch.encoding, sch.data)
+                ids[ch.id] = writer.register_channel(ch.topic, ch.message_encoding, sid)
+            writer.add_message(ids[ch.id], msg.log_time, msg.data, msg.publish_time)
+        writer.finish()
+
+
+def test_the_data_section_crc_is_checked_where_the_writer_stored_one(
+    intact: Intact, tmp_path: Path
+) -> None:
+    good = tmp_path / "lib.mcap"
+    _copy_with_data_crc(intact.path, good)
+    assert not open_log(good).verify()
+    data = bytearray(good.read_bytes())
+    pos = 8
+    while data[pos] != 0x07:  # the first Message Index record: no CRC of its own
+        pos += 9 + struct.unpack_from("<Q", data, pos + 1)[0]
+    data[pos + 9 + 6 + 4 + 3] ^= 0x01  # a log time in its first entry
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    log = open_log(bad)
+    assert not log.damage  # nothing else notices: the index entries are not used
+    assert [x.part for x in log.verify().losses] == ["data section"]
+    assert _messages(bad) == _messages(good)

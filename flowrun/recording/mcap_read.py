@@ -162,6 +162,7 @@ class Structure:
     message_counts: dict[int, int] | None = None
     indexed: bool = False
     good_bytes: int = 0
+    summary_start: int = 0
     damage: DamageReport = field(default_factory=DamageReport)
 
 
@@ -327,6 +328,29 @@ def count_messages(f: IO[bytes], ref: ChunkRef, channel_id: int, size: int) -> i
     return nbytes // 16
 
 
+def check_data_section(f: IO[bytes], st: Structure) -> bool | None:
+    """Check the Data End record's CRC of the whole data section (magic to Data End).
+
+    Returns ``None`` when there is none to check (no summary, or a CRC of 0: "not
+    available", as flowrun's writer and the mcap library by default write it).
+    """
+    at = st.summary_start - 13  # Data End: opcode, length 4, CRC, right before the summary
+    if not st.indexed or at < len(MAGIC):
+        return None
+    opcode, length, crc = struct.unpack("<BQI", _read(f, at, 13))
+    if opcode != OP_DATA_END or length != 4 or crc == 0:
+        return None
+    value, pos = 0, 0
+    f.seek(0)
+    while pos < at:
+        block = f.read(min(8 << 20, at - pos))
+        if not block:
+            return False
+        value = zlib.crc32(block, value)
+        pos += len(block)
+    return value == crc
+
+
 # -- opening -------------------------------------------------------------------------------
 def read_structure(f: IO[bytes], size: int) -> Structure:
     """Everything but the chunks' contents: from the summary if it is intact, else by a scan."""
@@ -352,6 +376,7 @@ def _from_summary(f: IO[bytes], st: Structure) -> str | None:
     opcode, length, summary_start, _, crc = _FOOTER.unpack(_read(f, footer_at, _FOOTER.size))
     if opcode != OP_FOOTER or length != 20 or not len(MAGIC) < summary_start <= footer_at:
         return "footer damaged"
+    st.summary_start = summary_start
     blob = _read(f, summary_start, footer_at + _FOOTER.size - 4 - summary_start)
     if crc and zlib.crc32(blob) != crc:
         return "summary CRC mismatch"

@@ -299,6 +299,32 @@ class McapLog:
                             self._channels[ch.id] = ch
                             keep = self._wanted_channels(wanted)
 
+    def verify(self) -> DamageReport:
+        """Read every chunk (checking its CRC) and the data section's CRC where the writer
+        stored one (:meth:`check_data_section`); returns the complete :attr:`damage`."""
+        for _ in self.messages(topics=()):
+            pass
+        self.check_data_section()
+        return self.damage
+
+    def check_data_section(self) -> None:
+        """Check Data End's CRC of the data section, when the writer stored one (the mcap
+        library's ``enable_data_crcs``; flowrun's writer stores 0, "not available"): a
+        mismatch is added to :attr:`damage`. Reads the whole data section once."""
+        with open(self.path, "rb") as f:
+            ok = mcap_read.check_data_section(f, self._st)
+        if ok is not False:
+            return
+        chunks = "some chunks are damaged" if self.damage.lost_chunks else "every chunk checked"
+        loss = Loss(
+            "data section",
+            0,
+            f"Data End's CRC of the data section does not match ({chunks}; the damage may "
+            "be in a schema, channel, metadata or index record)",
+        )
+        if self.damage.add(loss):
+            log.warning("%s: %s", self.path, loss.describe())
+
     def _wanted_channels(self, topics: set[str] | None) -> dict[int, Channel]:
         return {
             cid: ch for cid, ch in self._channels.items() if topics is None or ch.topic in topics

@@ -92,6 +92,7 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
             end_ns = message.log_time if end_ns is None else max(end_ns, message.log_time)
         writer.finish()
         os.fsync(stream.fileno())
+    log.check_data_section()
     return RepairReport(
         in_path=src,
         out_path=dst,
