@@ -316,7 +316,7 @@ def test_list_networks_shows_each_type_with_its_parameters() -> None:
     assert result.exit_code == 0, result.output
     lines = {line.split()[0]: line for line in result.stdout.splitlines()}
     assert set(lines) == {"ring", "figure_eight", "merge", "highway", "template",
-                          "traffic_light_grid"}  # fmt: skip
+                          "traffic_light_grid", "bottleneck", "highway_ramps"}  # fmt: skip
     assert "radius_ring=30" in lines["figure_eight"]
     assert (
         "use_ghost_edge=false" in lines["highway"]
