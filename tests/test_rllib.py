@@ -92,7 +92,7 @@ def test_single_agent_run_folder(ring_run: Path) -> None:
 
 
 def test_resume_continues_the_iteration_counter(ring_run: Path) -> None:
-    cfg = resume_config(ring_run, ["train.total_timesteps=600"])
+    cfg = resume_config(ring_run, ["train.total_timesteps=600", "train.eval_freq=0"])
     result = train_rllib(cfg, resume_dir=ring_run, argv=["flowrun", "train", "--resume"])
     assert (result.status, result.timesteps, result.resumed_from) == ("complete", 600, 400)
     progress = _lines(ring_run / "progress.jsonl")
