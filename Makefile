@@ -2,7 +2,9 @@
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-STAMP := $(VENV)/.installed
+# `make run` needs only the core; `make test` (CI) installs every extra so all tests run.
+CORE_STAMP := $(VENV)/.installed-core
+FULL_STAMP := $(VENV)/.installed-all
 
 .PHONY: run test lint bench clean install
 
@@ -10,23 +12,28 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 
-# torch is pinned first so the train extra never pulls a multi-GB CUDA build.
-$(STAMP): $(BIN)/python pyproject.toml
+$(CORE_STAMP): $(BIN)/python pyproject.toml
+	$(BIN)/pip install --quiet -e .
+	touch $(CORE_STAMP)
+
+# torch is pinned first so no extra (train, rllib) ever pulls a multi-GB CUDA build.
+# The rllib extra pins gymnasium==1.2.2 (Ray RLlib's exact pin), so the tests run on that.
+$(FULL_STAMP): $(BIN)/python pyproject.toml
 	$(BIN)/pip install --quiet torch==2.13.0
-	$(BIN)/pip install --quiet -e '.[train,dev,multiagent]'
-	touch $(STAMP)
+	$(BIN)/pip install --quiet -e '.[train,dev,multiagent,rllib]'
+	touch $(CORE_STAMP) $(FULL_STAMP)
 
-install: $(STAMP)
+install: $(FULL_STAMP)
 
-run: $(STAMP)
+run: $(CORE_STAMP)
 	$(BIN)/flowrun baseline configs/sugiyama.yaml
 
-test: $(STAMP)
+test: $(FULL_STAMP)
 	$(BIN)/ruff check flowrun tests bench examples
 	$(BIN)/mypy
 	$(BIN)/python -m pytest -q
 
-bench: $(STAMP)
+bench: $(FULL_STAMP)
 	$(BIN)/python bench/ring.py
 
 clean:
