@@ -265,7 +265,7 @@ def write_tables(plan: SweepPlan, rows: list[dict[str, Any]], metric: str) -> tu
         writer = csv.DictWriter(f, fieldnames=columns)
         writer.writeheader()
         for row in rows:
-            writer.writerow({c: _cell(row.get(c)) for c in columns})
+            writer.writerow({c: _exact(row.get(c)) for c in columns})
     shown = [a.key for a in plan.axes] + ["seed", "status"]
     for name in (metric, "mean_speed", "last_half_mean_speed", "outflow", "collisions"):
         if name not in shown:
@@ -275,6 +275,13 @@ def write_tables(plan: SweepPlan, rows: list[dict[str, Any]], metric: str) -> tu
     md_path = plan.folder / "results.md"
     md_path.write_text("\n".join(lines) + "\n")
     return csv_path, md_path
+
+
+def _exact(value: Any) -> str:
+    """A CSV cell: floats to the last bit (``repr``), missing and non-finite values empty."""
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else ""
+    return "" if value is None else str(value)
 
 
 def _cell(value: Any) -> str:

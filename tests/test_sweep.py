@@ -1,0 +1,193 @@
+"""``flowrun sweep``: the grid plan (no SUMO), then real sweeps of the Sugiyama ring in parallel
+processes: one run folder per point, the table and plot, re-runs that skip finished points, and
+an interrupted sweep that keeps what finished and resumes."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from flowrun.cli.main import app
+from flowrun.config.loader import load_config
+from flowrun.errors import ConfigError
+from flowrun.experiment.rundir import is_complete, read_status
+from flowrun.experiment.sweep import (
+    check_metric,
+    finished_folder,
+    parse_grid,
+    plan_sweep,
+    split_values,
+)
+
+ROOT = Path(__file__).resolve().parent.parent
+SUGIYAMA = ROOT / "configs" / "sugiyama.yaml"
+
+# --- the plan ----------------------------------------------------------------------------------
+
+
+def test_grid_values_split_on_commas_outside_brackets() -> None:
+    assert split_values("230, 260,300") == ["230", "260", "300"]
+    assert split_values("[1,2],{a: 1, b: 2},x") == ["[1,2]", "{a: 1, b: 2}", "x"]
+
+
+@pytest.mark.parametrize(
+    ("items", "needle"),
+    [
+        ([], "--grid is required"),
+        (["network.length"], "must look like"),
+        (["=1,2"], "must look like"),
+        (["network.length=230,,260"], "empty value"),
+        (["network.length=230,230"], "listed twice"),
+        (["network.length=230", "network.length=260"], "given twice"),
+    ],
+)
+def test_a_bad_grid_is_refused(items: list[str], needle: str) -> None:
+    with pytest.raises(ConfigError, match=needle):
+        parse_grid(items)
+
+
+def test_the_plan_is_the_product_of_grid_values_and_seeds(tmp_path: Path) -> None:
+    cfg = load_config(SUGIYAMA, ["sim.seed=5"])
+    axes = parse_grid(["network.length=230,260", "vehicles[0].count=20,21,22"])
+    plan = plan_sweep(cfg, axes, 2, tmp_path)
+    assert len(plan.points) == 2 * 3 * 2
+    assert plan.seeds == (5, 6)
+    assert plan.points[0].overrides == ["network.length=230", "vehicles[0].count=20"]
+    assert plan.points[0].label == "network.length=230__vehicles[0].count=20__seed=5"
+    assert len({p.label for p in plan.points}) == len(plan.points)
+    assert plan.folder.parent == tmp_path / "sugiyama"
+    # More seeds later: the same sweep folder, so the first seeds' runs are reused.
+    assert plan_sweep(cfg, axes, 3, tmp_path).folder == plan.folder
+    # Another grid or other run options: another sweep.
+    other = parse_grid(["network.length=230,261", "vehicles[0].count=20,21,22"])
+    assert plan_sweep(cfg, other, 2, tmp_path).folder != plan.folder
+    assert plan_sweep(cfg, axes, 2, tmp_path, ["--steps", "9"]).folder != plan.folder
+
+
+def test_labels_are_safe_folder_names(tmp_path: Path) -> None:
+    cfg = load_config(SUGIYAMA)
+    plan = plan_sweep(cfg, parse_grid(["name=a/../b,c d"]), 1, tmp_path)
+    labels = [p.label for p in plan.points]
+    assert all("/" not in label and " " not in label for label in labels)
+    assert len(set(labels)) == 2
+
+
+def test_an_unknown_metric_gets_a_did_you_mean() -> None:
+    with pytest.raises(ConfigError, match="did you mean 'outflow'"):
+        check_metric("outflw")
+    assert check_metric("outflow") == "outflow"
+
+
+def test_a_cut_or_interrupted_point_is_not_taken_for_finished(tmp_path: Path) -> None:
+    plan = plan_sweep(load_config(SUGIYAMA), parse_grid(["network.length=230"]), 1, tmp_path)
+    (point,) = plan.points
+    folder = plan.folder / point.label
+    folder.mkdir(parents=True)
+    (folder / "metrics.json").write_text(json.dumps({"status": "complete", "runs": []}))
+    for status in (
+        {"status": "running", "pid": 2**22 + 1, "host": os.uname()[1]},  # no such process
+        {"status": "interrupted", "exit_code": 130},
+        {"status": "failed", "error": "x"},
+    ):
+        (folder / "status.json").write_text(json.dumps(status))
+        assert finished_folder(plan, point) is None
+    (folder / "status.json").write_text(json.dumps({"status": "complete"}))
+    assert finished_folder(plan, point) == folder
+
+
+# --- real sweeps -------------------------------------------------------------------------------
+
+
+def read_csv(path: Path) -> list[dict[str, str]]:
+    with path.open() as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.mark.sumo
+def test_a_sweep_runs_each_point_in_its_folder_then_tables_and_plot_and_reruns_skip(
+    tmp_path: Path,
+) -> None:
+    args = ["sweep", str(SUGIYAMA), "--grid", "network.length=230,260", "--steps", "100",
+            "--jobs", "2", "--metric", "last_half_mean_speed", "--out", str(tmp_path)]  # fmt: skip
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.stderr
+    (folder,) = tmp_path.glob("sugiyama/sweep-*")
+    points = sorted(p for p in folder.iterdir() if p.is_dir())
+    assert [p.name for p in points] == ["network.length=230__seed=0", "network.length=260__seed=0"]
+    pids = {read_status(p).pid for p in points}
+    assert len(pids) == 2 and os.getpid() not in pids  # each point in its own process
+    assert all(is_complete(p) for p in points)
+    rows = read_csv(folder / "results.csv")
+    assert [(r["network.length"], r["seed"], r["status"]) for r in rows] == [
+        ("230", "0", "complete"),
+        ("260", "0", "complete"),
+    ]
+    for row, point in zip(rows, points, strict=True):
+        run = json.loads((point / "metrics.json").read_text())["runs"][0]
+        assert float(row["last_half_mean_speed"]) == run["last_half_mean_speed"]
+        assert load_config(point / "config.yaml").network.net_params.additional_params[
+            "length"
+        ] == float(row["network.length"])
+    # more room per car: faster traffic
+    assert float(rows[1]["last_half_mean_speed"]) > float(rows[0]["last_half_mean_speed"])
+    assert "| network.length | seed | status | last_half_mean_speed |" in (
+        folder / "results.md"
+    ).read_text()
+    assert (folder / "last_half_mean_speed.png").read_bytes()[:4] == b"\x89PNG"
+    stamps = {p: (p / "status.json").stat().st_mtime_ns for p in points}
+    again = CliRunner().invoke(app, args)
+    assert again.exit_code == 0, again.stderr
+    assert "2 of 2 point(s) already done" in again.stdout
+    assert sorted(p for p in folder.iterdir() if p.is_dir()) == points
+    assert {p: (p / "status.json").stat().st_mtime_ns for p in points} == stamps
+
+
+@pytest.mark.sumo
+def test_an_interrupted_sweep_keeps_finished_points_and_the_same_command_finishes_it(
+    tmp_path: Path,
+) -> None:
+    cmd = [str(Path(sys.executable).parent / "flowrun"), "sweep", str(SUGIYAMA),
+           "--grid", "vehicles[0].count=14,18,22", "--steps", "1500", "--jobs", "1",
+           "--no-record", "--out", str(tmp_path)]  # fmt: skip
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        second = "sugiyama/sweep-*/vehicles[[]0[]].count=18__seed=0/status.json"
+        while not list(tmp_path.glob(second)):  # the second point is running
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        time.sleep(random.Random(11).uniform(0.0, 0.3))
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    (folder,) = tmp_path.glob("sugiyama/sweep-*")
+    states = {p.name: read_status(p).state for p in folder.iterdir() if p.is_dir()}
+    assert states["vehicles[0].count=14__seed=0"] == "complete"
+    assert states["vehicles[0].count=18__seed=0"] in {"interrupted", "complete"}
+    assert "running" not in states.values() and "cut" not in states.values()
+    assert "vehicles[0].count=22__seed=0" not in states  # never started
+    rows = read_csv(folder / "results.csv")
+    assert rows[0]["status"] == "complete" and rows[2]["status"] == "missing"
+    done = subprocess.run(cmd, capture_output=True, text=True, check=False, timeout=300)
+    assert done.returncode == 0, done.stderr
+    rows = read_csv(folder / "results.csv")
+    assert [r["status"] for r in rows] == ["complete"] * 3
+    assert "already done: skipped" in done.stdout
+    for name, state in states.items():  # what was there is still there, as it was
+        assert read_status(folder / name).state == state
