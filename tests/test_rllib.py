@@ -125,9 +125,7 @@ def test_evaluate_a_checkpoint_to_mcap(ring_run: Path) -> None:
 
 
 # ---------------------------------------------------------------- training, multi-agent
-def test_multi_agent_grid_trains_and_evaluates(
-    local_ray: None, tmp_path: Path
-) -> None:
+def test_multi_agent_grid_trains_and_evaluates(local_ray: None, tmp_path: Path) -> None:
     cfg = load_config(CONFIGS / "multiagent_grid.yaml", GRID)
     result = train_rllib(cfg, out=tmp_path, argv=["flowrun", "train"])
     run = result.run_dir
