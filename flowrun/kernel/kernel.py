@@ -72,6 +72,7 @@ class Kernel:
         self.close()
         spec = network.spec
         self.net_file = build_network(spec, self.work_dir, name=network.network_type or "network")
+        self.work_dir.mkdir(parents=True, exist_ok=True)  # a template is not built there
         routes = self.work_dir / f"{self.net_file.stem.removesuffix('.net')}.rou.xml"
         routes.write_text(routes_xml(spec, network.vehicles, network.net_params.inflows))
         extra = tuple(Path(f) for f in spec.extra_files)  # a template's own vTypes and routes
