@@ -62,6 +62,18 @@ def test_huge_time_bounds_mean_the_whole_log(sumo_log: Path) -> None:
     assert steps is not None and frames and int(steps.group(1)) == frames
 
 
+def test_a_window_outside_the_log_and_wrong_paths_are_clear_errors(
+    sumo_log: Path, tmp_path: Path
+) -> None:
+    assert "no logged step within --from 1e+300 s" in _one_error(
+        _replay(sumo_log, "--from", "1e300")
+    )
+    assert "the log covers 0.1-" in _one_error(_replay(sumo_log, "--to", "-5"))
+    assert "is a folder" in _one_error(_replay(sumo_log.parent))
+    message = _one_error(_replay(sumo_log, "--plot", "speed", "--out", sumo_log))
+    assert "is a file; give a folder" in message
+
+
 def test_csv_and_foxglove_never_overwrite(sumo_log: Path, tmp_path: Path) -> None:
     csv = tmp_path / "states.csv"
     first = _replay(sumo_log, "--csv", csv)

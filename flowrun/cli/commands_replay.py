@@ -224,11 +224,24 @@ def register(app: typer.Typer) -> None:
                 raise RecordingError("--csv and --foxglove work on one log; drop the second log")
             _check_new(csv, "--csv")
             _check_new(foxglove, "--foxglove")
+            if plot is not None and out is not None and out.exists() and not out.is_dir():
+                raise RecordingError(f"--out {out} is a file; give a folder for the plots")
             chosen = _parse_vehicles(vehicles)
             edges = parse_route(route) if route is not None else None
             opened = [open_log(p) for p in logs]
             layouts = [layout_for(lg, edges) for lg in opened]
             series = [speed_series(lg, start_s=start, end_s=end, vehicles=chosen) for lg in opened]
+            if (start is not None or end is not None) and not any(s.times.size for s in series):
+                spans = [lg.time_range for lg in opened]
+                covers = " and ".join(f"{a:.1f}-{b:.1f} s" for a, b in filter(None, spans))
+                window = " and ".join(
+                    f"{name} {value:g} s"
+                    for name, value in (("--from", start), ("--to", end))
+                    if value is not None
+                )
+                raise RecordingError(
+                    f"no logged step within {window}; the log covers {covers or 'no time'}"
+                )
             if chosen is not None:
                 seen = set().union(*(s.vehicle_types for s in series))
                 missing = [v for v in chosen if v not in seen]

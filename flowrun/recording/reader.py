@@ -397,6 +397,8 @@ def open_log(path: str | os.PathLike[str]) -> McapLog:
         RecordingError: the file is missing, is not MCAP, or holds no flowrun vehicle topic.
     """
     p = Path(path)
+    if p.is_dir():
+        raise RecordingError(f"{p} is a folder; give an MCAP log in it (e.g. {p}/run_0.mcap)")
     if not p.is_file():
         raise RecordingError(
             f"{p}: no such file; expected an MCAP log (runs/<config>/<run>/*.mcap)"
