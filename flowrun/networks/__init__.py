@@ -5,6 +5,7 @@ from flowrun.networks.bottleneck import BottleneckNetwork
 from flowrun.networks.figure_eight import FigureEightNetwork
 from flowrun.networks.highway import HighwayNetwork
 from flowrun.networks.highway_ramps import HighwayRampsNetwork
+from flowrun.networks.i210_subnetwork import I210SubNetwork
 from flowrun.networks.merge import MergeNetwork
 from flowrun.networks.ring import ADDITIONAL_NET_PARAMS, RingNetwork
 from flowrun.networks.template import TemplateNetwork
@@ -15,6 +16,7 @@ __all__ = [
     "FigureEightNetwork",
     "HighwayNetwork",
     "HighwayRampsNetwork",
+    "I210SubNetwork",
     "MergeNetwork",
     "Network",
     "NetworkSpec",

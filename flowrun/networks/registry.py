@@ -11,6 +11,7 @@ from flowrun.networks.bottleneck import BottleneckNetwork
 from flowrun.networks.figure_eight import FigureEightNetwork
 from flowrun.networks.highway import HighwayNetwork
 from flowrun.networks.highway_ramps import HighwayRampsNetwork
+from flowrun.networks.i210_subnetwork import I210SubNetwork
 from flowrun.networks.merge import MergeNetwork
 from flowrun.networks.ring import RingNetwork, check_ring_fits
 from flowrun.networks.template import TemplateNetwork
@@ -26,6 +27,7 @@ NETWORKS: dict[str, type[Network]] = {
     "traffic_light_grid": TrafficLightGridNetwork,
     "bottleneck": BottleneckNetwork,
     "highway_ramps": HighwayRampsNetwork,
+    "i210_subnetwork": I210SubNetwork,
 }
 _ALIASES = {
     "loop": "ring",
@@ -49,6 +51,7 @@ _ALIASES = {
     "BottleneckScenario": "bottleneck",
     "HighwayRampsNetwork": "highway_ramps",
     "HighwayRampsScenario": "highway_ramps",
+    "I210SubNetwork": "i210_subnetwork",
 }
 
 
