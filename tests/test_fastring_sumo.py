@@ -119,3 +119,29 @@ def test_observations_rewards_and_episode_end_equal_the_sumo_env(env_class: str)
     assert np.abs(sumo["r"] - np.array(rewards)).max() < 1e-9
     assert [tuple(e) for e in sumo["end"]] == ends
     assert ends[-1] == (False, True)
+
+
+def test_a_numpy_episode_log_holds_what_the_sumo_baseline_log_holds(tmp_path: Any) -> None:
+    from flowrun.experiment.baseline import run_baseline
+    from flowrun.fastring.record import record_episode
+    from flowrun.recording import open_log
+
+    cfg = load("sugiyama_noise", "env.horizon=300")
+    sumo_dir = run_baseline(cfg, runs=1, out=tmp_path / "sumo").run_dir
+    sumo_log = open_log(next(sumo_dir.glob("*.mcap")))
+    path = tmp_path / "numpy.mcap"
+    assert record_episode(cfg, path, seed=0) == 0.0
+    log = open_log(path)
+    sumo_frames, frames = list(sumo_log.frames()), list(log.frames())
+    assert len(frames) == len(sumo_frames) == 301
+    for ours, theirs in zip(frames, sumo_frames, strict=True):
+        assert ours.step == theirs.step and ours.ids == theirs.ids and ours.edges == theirs.edges
+        assert ours.time == pytest.approx(theirs.time)
+        assert np.abs(ours.speed - theirs.speed).max() < TOL
+        assert np.abs(ours.lane_pos - theirs.lane_pos).max() < 1e-8
+        assert ours.leader == theirs.leader
+        assert np.allclose(ours.accel_cmd, theirs.accel_cmd, atol=1e-9, equal_nan=True)
+    stats, sumo_stats = list(log.stats()), list(sumo_log.stats())
+    assert [s.mean_speed for s in stats] == pytest.approx([s.mean_speed for s in sumo_stats])
+    assert log.metadata["network_length"] == sumo_log.metadata["network_length"]
+    assert log.metadata["edge_starts"] == sumo_log.metadata["edge_starts"]

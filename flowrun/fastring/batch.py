@@ -170,6 +170,9 @@ class RingPhysics:
         self._cache: dict[int, list[tuple[FloatArray, FloatArray, FloatArray, FloatArray]]] = {}
         self.rl = plan.rl_rows
         self.humans = [g for g in plan.groups if not g.is_rl]
+        #: keep each step's commanded accelerations in :attr:`last_accel` (for logs)
+        self.keep_accel = False
+        self.last_accel: FloatArray | None = None
         capped = plan.safe_cap.copy()
         capped[self.rl] = False
         self.capped_humans = np.flatnonzero(capped)
@@ -185,6 +188,11 @@ class RingPhysics:
                 for g in self.humans
             ]  # fmt: skip
         return self._cache[b]
+
+    def _accel_rows(self, b: int) -> FloatArray:
+        if self.last_accel is None or self.last_accel.shape[1] != b:
+            self.last_accel = np.full((self.plan.num_cars, b), np.nan)
+        return self.last_accel
 
     def safe_speed(self, s: RingState, rows: IntArray, leader_speed: FloatArray) -> FloatArray:
         """SUMO's IDM follow speed of the cars ``rows`` (``(len(rows), B)``), m/s."""
@@ -229,6 +237,8 @@ class RingPhysics:
                 acc = acc + noise_term(dt, g.controller.noise, z[k : k + n])
                 k += n
             nxt[sl] = commanded_speed(v[sl], acc, dt, limit)
+            if self.keep_accel:
+                self._accel_rows(b)[sl] = acc
         if self.capped_humans.size:
             rows = self.capped_humans
             nxt[rows] = np.minimum(nxt[rows], self.safe_speed(s, rows, vl))
@@ -246,6 +256,8 @@ class RingPhysics:
                 target = commanded_speed(v[rl], rl_accel, dt, limit)
                 cap = p.safe_cap[rl][:, None]
                 nxt[rl] = np.where(cap, np.minimum(target, v_safe), target)
+        if self.keep_accel and rl.size:
+            self._accel_rows(b)[rl] = np.nan if rl_accel is None else rl_accel
         s.speed = nxt
         s.odo = s.odo + nxt * dt
         u = s.u = s.start + s.odo

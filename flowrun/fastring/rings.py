@@ -8,7 +8,7 @@ does); a step applies the RL cars' accelerations and reports collisions.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -48,6 +48,9 @@ class FastRings:
         self.state: RingState | None = None
         self.episode_steps = np.zeros(num_rings, dtype=np.int64)
         self.collisions = np.zeros(num_rings, dtype=np.int64)
+        #: called with the state and the rings that collided after every simulation step
+        #: (warm-up included) and at the start of an episode (a log's frames)
+        self.observer: Callable[[RingState, BoolArray], None] | None = None
 
     def reset(self, cols: Sequence[int] | IntArray, seeds: Sequence[int | None]) -> None:
         """Start new episodes on the rings ``cols`` (``seeds[i]`` reseeds ring ``cols[i]``;
@@ -65,6 +68,9 @@ class FastRings:
             self.noise.restart(col, episode.noise_seed)
             episodes.append(episode)
         part = fresh_state(self.plan, episodes)
+        if self.observer is not None:
+            self.physics.last_accel = None
+            self.observer(part, np.zeros(cols.size, dtype=bool))
         self.collisions[cols] = 0
         self.episode_steps[cols] = 0
         part = self._warm_up(cols, part)
@@ -82,6 +88,8 @@ class FastRings:
         for _ in range(self.plan.warmup):
             sub = part if active.size == cols.size else part.take(active)
             crashed = self.physics.step(sub, self.noise.draw(cols[active]), None)
+            if self.observer is not None:
+                self.observer(sub, crashed)
             if active.size != cols.size:
                 part.put(active, sub)
             if crashed.any():
@@ -96,6 +104,8 @@ class FastRings:
         SUMO drives them). Returns which rings collided."""
         assert self.state is not None, "reset() every ring first"
         crashed = self.physics.step(self.state, self.noise.draw(), rl_accel)
+        if self.observer is not None:
+            self.observer(self.state, crashed)
         self.episode_steps += 1
         self.collisions += crashed
         return crashed

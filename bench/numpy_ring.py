@@ -1,0 +1,95 @@
+"""Throughput of the numpy ring backend (``sim.backend: numpy``), and where SB3 takes over.
+
+For each number of rings B, env-steps per second (B rings x vector steps / wall time) of:
+
+- ``rings``: the backend alone (``RingVecEnv.step``: physics, noise, observations, rewards,
+  automatic resets with their warm-up);
+- ``+wrappers``: inside ``VecMonitor`` and ``VecNormalize`` (what ``flowrun train`` wraps);
+- ``+predict``: plus SB3's ``policy.predict`` of a 64x64 MLP on the B observations per step
+  (the per-step work of SB3's rollout collection, without its buffer);
+- ``learn``: SB3 TRPO ``learn`` itself (collection + buffer + updates, ``n_steps`` per ring
+  chosen so a batch holds ~6,000 steps as in configs/ring_wave.yaml).
+
+Wall-clock numbers on a shared machine: the 1-minute load average is printed before and after.
+
+    .venv/bin/python bench/numpy_ring.py [--config configs/ring_wave_numpy.yaml]
+        [--rings 1 16 64 256 1024] [--steps 2000] [--learn 60000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from sb3_contrib import TRPO
+from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
+
+from flowrun.config.loader import load_config
+from flowrun.fastring.plan import ring_plan
+from flowrun.fastring.vec_env import RingVecEnv
+
+
+def rate(step: object, rings: int, steps: int) -> float:
+    """Env-steps per second of ``steps`` calls of ``step()`` on ``rings`` rings."""
+    start = time.perf_counter()
+    for _ in range(steps):
+        step()  # type: ignore[operator]
+    return rings * steps / (time.perf_counter() - start)
+
+
+def main() -> None:
+    """Print the table."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--config", type=Path, default=Path("configs/ring_wave_numpy.yaml"))
+    parser.add_argument("--rings", type=int, nargs="+", default=[1, 16, 64, 256, 1024])
+    parser.add_argument("--steps", type=int, default=2000, help="vector steps per measure")
+    parser.add_argument("--learn", type=int, default=60000, help="env steps of TRPO learn")
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    plan = ring_plan(load_config(args.config))
+    print(
+        f"load before: {os.getloadavg()[0]:.2f}; {args.config}: {plan.num_cars} cars, "
+        f"{plan.rl_rows.size} RL, horizon {plan.horizon} + warm-up {plan.warmup}"
+    )
+    print("| rings | reset s | rings steps/s | +wrappers | +predict | learn (TRPO) |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    for b in args.rings:
+        steps = max(50, min(args.steps, args.steps * 64 // b))
+        venv = RingVecEnv(plan, b)
+        venv.seed(0)
+        start = time.perf_counter()
+        venv.reset()
+        reset_s = time.perf_counter() - start
+        actions = np.zeros((b, plan.rl_rows.size), dtype=np.float32)
+        raw = rate(lambda v=venv, a=actions: v.step(a), b, steps)
+        wrapped = VecNormalize(VecMonitor(venv), gamma=0.999)
+        wrapped.reset()
+        wrap = rate(lambda v=wrapped, a=actions: v.step(a), b, steps)
+        model = TRPO("MlpPolicy", wrapped, policy_kwargs={"net_arch": [64, 64]}, device="cpu",
+                     n_steps=max(8, 6000 // b), batch_size=600, seed=0)  # fmt: skip
+        obs = wrapped.reset()
+
+        def predict(m: TRPO = model, v: VecNormalize = wrapped) -> None:
+            nonlocal obs
+            action, _ = m.predict(obs, deterministic=False)
+            obs, *_ = v.step(action)
+
+        pred = rate(predict, b, steps)
+        learn = float("nan")
+        if args.learn:
+            start = time.perf_counter()
+            model.learn(args.learn)
+            learn = model.num_timesteps / (time.perf_counter() - start)
+        print(
+            f"| {b} | {reset_s:.2f} | {raw:,.0f} | {wrap:,.0f} | {pred:,.0f} | {learn:,.0f} |",
+            flush=True,
+        )
+    print(f"load after: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
