@@ -218,3 +218,22 @@ def test_accel_env_brings_its_av_back_after_it_leaves() -> None:
         rl_speed = sum(vk.get_speed(v) for v in vk.get_rl_ids())
         assert info["reward_terms"]["forward_progress"] == pytest.approx(0.1 * rl_speed)
         assert reward == pytest.approx(sum(info["reward_terms"].values()))
+
+
+def test_desired_velocity_env_scales_with_the_network_and_redraws_the_inflow() -> None:
+    with env_of("bottleneck_desired_velocity", "network.scaling=2", "env.warmup_steps=0",
+                "env.additional_params.reset_inflow=true",
+                "env.additional_params.inflow_range=[1000, 2000]") as env:  # fmt: skip
+        # Flow's bottleneck2: 281 observations, 40 actions
+        assert env.observation_space.shape == (281,)
+        assert env.action_space.shape == (40,)
+        totals = []
+        for seed in (0, 1, 0):
+            env.reset(seed=seed)
+            flows = env.network.net_params.inflows.get()
+            rates = [f.vehs_per_hour for f in flows]
+            assert rates[1] / sum(rates) == pytest.approx(0.1)  # the AV share is kept
+            totals.append(sum(rates))
+            env.step(np.zeros(40, dtype=np.float32))
+        assert all(2000 <= t <= 4000 for t in totals)  # the range times the scaling
+        assert totals[0] == totals[2] != totals[1]  # drawn from the env's seeded generator
