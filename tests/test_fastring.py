@@ -146,3 +146,11 @@ def test_gymnasium_vector_env_resets_ended_rings_in_the_same_step() -> None:
     assert truncated.all() and not terminated.any()
     assert info["_final_obs"].all() and info["final_obs"][0].shape == (3,)
     assert reward.shape == (3,) and info["mean_speed"].shape == (3,)
+
+
+def test_commands_that_run_on_sumo_only_refuse_a_numpy_config() -> None:
+    from flowrun.fastring.plan import refuse_numpy_backend
+
+    with pytest.raises(ConfigError, match="flowrun baseline runs on SUMO only"):
+        refuse_numpy_backend(wave(), "flowrun baseline")
+    refuse_numpy_backend(load("ring_wave"), "flowrun baseline")  # SUMO configs pass

@@ -271,6 +271,18 @@ def check_numpy_backend(cfg: ExperimentConfig) -> None:
         ring_plan(cfg)
 
 
+def refuse_numpy_backend(cfg: ExperimentConfig, command: str) -> None:
+    """Raise :class:`ConfigError` when ``cfg`` asks for the numpy backend: ``command`` runs on
+    SUMO only (the numpy backend serves training; its rings equal SUMO's to 1e-9 m/s)."""
+    if cfg.sim.backend == "numpy":
+        raise ConfigError(
+            f"{command} runs on SUMO only; sim.backend numpy serves flowrun train. Add "
+            "--set sim.backend=sumo (same trajectories: the backends agree to 1e-9 m/s)",
+            "sim.backend",
+            cfg.source or "",
+        )
+
+
 def describe(plan: RingPlan) -> dict[str, Any]:
     """A few facts of a plan, for logs and the benchmark."""
     return {
