@@ -29,6 +29,7 @@ from flowrun.experiment.rundir import (
 )
 from flowrun.experiment.runner import Experiment, FrameSink
 from flowrun.experiment.signal_baselines import SignalMetrics, SignalRun
+from flowrun.fastring.plan import refuse_numpy_backend
 from flowrun.recording.writer import McapRecorder
 
 log = logging.getLogger(__name__)
@@ -167,6 +168,7 @@ def run_baseline(
     # ``--steps`` is the episode length: the horizon follows it (and the saved config says so).
     cfg = replace(cfg, sim=replace(cfg.sim, seed=seed), env=replace(cfg.env, horizon=n_steps))
     env_class(cfg)  # a wrong env class or missing additional_params: fail before any file
+    refuse_numpy_backend(cfg, "flowrun baseline")
     check_out_dir(folder.parent if folder is not None else out)
     run_dir = start_run(out, cfg, seed, argv, folder)
     with tracked_run(run_dir):
