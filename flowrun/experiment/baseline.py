@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable
+from contextlib import suppress
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -187,7 +188,18 @@ def _run(
     render: bool,
     progress: Callable[[int, int], None] | None,
 ) -> BaselineResult:
-    env = make_env(cfg, render_mode="rgb_array" if render else None, work_dir=run_dir / "sumo")
+    try:
+        env = make_env(cfg, render_mode="rgb_array" if render else None, work_dir=run_dir / "sumo")
+    except BaseException as err:  # e.g. a user env's __init__: say so in the run folder too
+        status = INTERRUPTED if isinstance(err, KeyboardInterrupt) else FAILED
+        with suppress(OSError):
+            write_json(
+                run_dir / "metrics.json",
+                {"status": status, "partial": True, "config": cfg.name, "seed": seed,
+                 "error": str(err).strip().splitlines()[0] if str(err).strip() else repr(err),
+                 "runs": []},
+            )  # fmt: skip
+        raise
     logs: list[Path] = []
     gif_frames: list[Any] = []
 
