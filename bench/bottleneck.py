@@ -22,11 +22,16 @@ CONFIG = Path(__file__).resolve().parent.parent / "configs" / "bottleneck.yaml"
 
 
 def measure_outflow(
-    inflow: float, seed: int, seconds: float, window: float, config: Path = CONFIG
+    inflow: float,
+    seed: int,
+    seconds: float,
+    window: float,
+    overrides: tuple[str, ...] = (),
+    config: Path = CONFIG,
 ) -> tuple[float, int]:
     """Outflow (veh/h) over the last ``window`` s of a ``seconds``-long all-human run with
     ``inflow`` veh/h entering edge ``1``, and the cars left waiting to enter at the end."""
-    cfg = load_config(config, [f"network.inflows.0.vehs_per_hour={inflow}"])
+    cfg = load_config(config, [f"network.inflows.0.vehs_per_hour={inflow}", *overrides])
     steps = round(seconds / cfg.sim.sim_step)
     env = make_env(override_config(cfg, [f"env.horizon={steps}", "env.sims_per_step=1"]))
     try:
@@ -50,13 +55,16 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--seconds", type=float, default=800.0)
     parser.add_argument("--window", type=float, default=500.0)
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="config override, as flowrun's --set (repeatable)")  # fmt: skip
     args = parser.parse_args()
     print(f"bottleneck (scaling 1), {args.seconds:.0f} s per run, outflow over the last "
-          f"{args.window:.0f} s, {args.seeds} seed(s)\n")  # fmt: skip
+          f"{args.window:.0f} s, {args.seeds} seed(s) {' '.join(args.set)}\n")  # fmt: skip
     print("| inflow (veh/h) | outflow (veh/h) | std | waiting to enter |")
     print("|---:|---:|---:|---:|")
     for inflow in (float(v) for v in args.inflows.split(",")):
-        runs = [measure_outflow(inflow, s, args.seconds, args.window) for s in range(args.seeds)]
+        runs = [measure_outflow(inflow, s, args.seconds, args.window, tuple(args.set))
+                for s in range(args.seeds)]  # fmt: skip
         out = [o for o, _ in runs]
         std = statistics.stdev(out) if len(out) > 1 else 0.0
         waiting = statistics.mean(w for _, w in runs)
