@@ -106,22 +106,26 @@ def run_points(
                 on_done(job.point, *job.result())
             time.sleep(POLL_S)
         if stop:
-            _stop(running, stop[0], on_done)
+            _stop(running, stop, on_done)
             raise Interrupted(stop[0])
 
 
 def _stop(
-    running: list[_Job], signum: int, on_done: Callable[[SweepPoint, int, str], None]
+    running: list[_Job], stop: list[int], on_done: Callable[[SweepPoint, int, str], None]
 ) -> None:
+    """Pass the first signal on to the running points and wait for them to finish their logs;
+    a second signal (or ``STOP_GRACE_S`` seconds) kills them."""
     for job in running:
         if job.proc.poll() is None:
-            job.proc.send_signal(signum)
+            job.proc.send_signal(stop[0])
     deadline = time.monotonic() + STOP_GRACE_S
+    while any(job.proc.poll() is None for job in running):
+        if len(stop) > 1 or time.monotonic() > deadline:
+            for job in running:
+                if job.proc.poll() is None:
+                    job.proc.kill()
+        time.sleep(POLL_S)
     for job in running:
-        try:
-            job.proc.wait(timeout=max(0.0, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            job.proc.kill()
         on_done(job.point, *job.result())
 
 
