@@ -13,8 +13,8 @@ Written from the MCAP specification (https://mcap.dev/spec). How a file is opene
    for the next chunk (its header's ``zstd`` compression field is a 8-byte pattern, and the
    header's sizes must agree) and carries on, so one bad byte costs one chunk, not the rest.
 
-Chunks are decompressed (size-capped) and checked against their ``uncompressed_crc`` when
-their messages are read; a bad chunk raises :class:`BadRecord` and the caller skips it.
+Chunks are read later, record by record, by :func:`~flowrun.recording.mcap_records.chunk_records`
+(size-capped decompression, ``uncompressed_crc`` checked).
 """
 
 from __future__ import annotations
@@ -24,12 +24,10 @@ import zlib
 from dataclasses import dataclass, field
 from typing import IO
 
-import zstandard
 from mcap.records import Channel, Schema
 
 from flowrun.recording.damage import DamageReport, Loss
 from flowrun.recording.mcap_file import (
-    CRC_KEY,
     MAGIC,
     OP_ATTACHMENT,
     OP_ATTACHMENT_INDEX,
@@ -44,107 +42,24 @@ from flowrun.recording.mcap_file import (
     OP_METADATA_INDEX,
     OP_SCHEMA,
     OP_STATISTICS,
-    metadata_crc,
 )
-
-_U16 = struct.Struct("<H")
-_U32 = struct.Struct("<I")
-_U64 = struct.Struct("<Q")
-_HEAD = struct.Struct("<BQ")
-_MSG = struct.Struct("<HIQQ")
-_CHUNK_FIXED = struct.Struct("<QQQI")
-_FOOTER = struct.Struct("<BQQQI")
-_KNOWN_OPS = frozenset(range(OP_HEADER, OP_DATA_END + 1))
-_SMALL_OPS = frozenset((OP_HEADER, OP_SCHEMA, OP_CHANNEL, OP_METADATA, OP_ATTACHMENT))
-_ZSTD_FIELD = b"\x04\x00\x00\x00zstd"  # a chunk header's compression string
-_ZSTD_AT = _HEAD.size + _CHUNK_FIXED.size  # where it stands in a chunk record
-MAX_CHUNK_BYTES = 1 << 31
-"""Largest uncompressed chunk accepted (a damaged size field must not allocate more)."""
-
-
-class BadRecord(Exception):
-    """A record that cannot be what the writer wrote (internal; callers turn it into a
-    :class:`~flowrun.recording.damage.Loss`)."""
-
-
-class CrcMismatch(BadRecord):
-    """A well-formed record whose content fails its CRC (its length can be trusted)."""
-
-
-class _Cursor:
-    """Reads the spec's little-endian fields from a buffer, never past ``end``."""
-
-    def __init__(self, buf: bytes, pos: int = 0, end: int | None = None) -> None:
-        self.buf, self.pos = buf, pos
-        self.end = len(buf) if end is None else end
-
-    def take(self, n: int) -> bytes:
-        if n < 0 or self.pos + n > self.end:
-            raise BadRecord(f"a field of {n} bytes runs past its record")
-        out = self.buf[self.pos : self.pos + n]
-        self.pos += n
-        return out
-
-    def unpack(self, fmt: struct.Struct) -> tuple[int, ...]:
-        return fmt.unpack(self.take(fmt.size))
-
-    def u16(self) -> int:
-        return int(self.unpack(_U16)[0])
-
-    def u32(self) -> int:
-        return int(self.unpack(_U32)[0])
-
-    def u64(self) -> int:
-        return int(self.unpack(_U64)[0])
-
-    def string(self) -> str:
-        try:
-            return self.take(self.u32()).decode("utf-8")
-        except UnicodeDecodeError as err:
-            raise BadRecord(f"a string is not UTF-8 ({err.reason})") from None
-
-    def string_map(self) -> dict[str, str]:
-        n = self.u32()
-        sub = _Cursor(self.buf, self.pos, self.pos + n)
-        self.take(n)
-        out: dict[str, str] = {}
-        while sub.pos < sub.end:
-            k = sub.string()
-            out[k] = sub.string()
-        return out
-
-    def int_map(self) -> dict[int, int]:
-        n = self.u32()
-        sub = _Cursor(self.buf, self.pos, self.pos + n)
-        self.take(n)
-        out: dict[int, int] = {}
-        while sub.pos < sub.end:
-            k = sub.u16()
-            out[k] = sub.u64()
-        return out
-
-
-@dataclass
-class ChunkRef:
-    """Where a chunk is and what the index (or its header) says it holds.
-
-    Attributes:
-        offset: byte offset of the Chunk record.
-        length: record length with opcode and length field, bytes.
-        start_ns: first message log time, ns.
-        end_ns: last message log time, ns.
-        indexed: whether the fields come from the CRC-checked summary (else from the
-            chunk's own header, unchecked until the chunk is read).
-        message_indexes: channel id -> offset of its Message Index record (for counting
-            what a damaged chunk held).
-    """
-
-    offset: int
-    length: int
-    start_ns: int
-    end_ns: int
-    indexed: bool
-    message_indexes: dict[int, int] = field(default_factory=dict)
+from flowrun.recording.mcap_records import (
+    CHUNK_FIXED,
+    HEAD,
+    U16,
+    U32,
+    BadRecord,
+    ChunkRef,
+    CrcMismatch,
+    Cursor,
+    done,
+    parse_attachment,
+    parse_channel,
+    parse_chunk_header,
+    parse_metadata,
+    parse_schema,
+    read_at,
+)
 
 
 @dataclass
@@ -166,168 +81,6 @@ class Structure:
     damage: DamageReport = field(default_factory=DamageReport)
 
 
-def _read(f: IO[bytes], offset: int, n: int) -> bytes:
-    f.seek(offset)
-    return f.read(n)
-
-
-# -- records -------------------------------------------------------------------------------
-def _done(cur: _Cursor) -> None:
-    """A scanned record's fields must fill it exactly (else its length field is damaged)."""
-    if cur.pos != cur.end:
-        raise BadRecord("the record's length does not match its fields")
-
-
-def parse_metadata(content: bytes) -> tuple[str, dict[str, str], bool | None]:
-    """A Metadata record's name and entries, and whether its ``flowrun_crc32`` entry matched
-    (``None`` when it has none: written by another tool or an older flowrun)."""
-    cur = _Cursor(content)
-    name = cur.string()
-    entries = cur.string_map()
-    _done(cur)
-    stored = entries.pop(CRC_KEY, None)
-    if stored is None:
-        return name, entries, None
-    return name, entries, stored == f"{metadata_crc(name, entries):08x}"
-
-
-def parse_attachment(content: bytes) -> tuple[str, bytes]:
-    """An Attachment record's name and data; raises :class:`BadRecord` on a CRC mismatch."""
-    cur = _Cursor(content)
-    cur.take(16)  # log and create time
-    name = cur.string()
-    cur.string()  # media type
-    data = cur.take(cur.u64())
-    fields_end = cur.pos
-    crc = cur.u32()
-    _done(cur)
-    if crc and zlib.crc32(content[:fields_end]) != crc:
-        raise CrcMismatch("attachment CRC mismatch")
-    return name, data
-
-
-def parse_schema(content: bytes) -> Schema:
-    cur = _Cursor(content)
-    sid = cur.u16()
-    name, encoding = cur.string(), cur.string()
-    data = cur.take(cur.u32())
-    _done(cur)
-    return Schema(id=sid, name=name, encoding=encoding, data=data)
-
-
-def parse_channel(content: bytes) -> Channel:
-    cur = _Cursor(content)
-    cid, sid = cur.u16(), cur.u16()
-    topic, encoding = cur.string(), cur.string()
-    metadata = cur.string_map()
-    _done(cur)
-    return Channel(id=cid, schema_id=sid, topic=topic, message_encoding=encoding, metadata=metadata)
-
-
-@dataclass(frozen=True)
-class ChunkHeader:
-    """A Chunk record's header fields."""
-
-    start_ns: int
-    end_ns: int
-    uncompressed_size: int
-    crc: int
-    compression: str
-    data_offset: int
-    data_size: int
-    length: int
-
-
-def parse_chunk_header(head: bytes, offset: int, size: int) -> ChunkHeader:
-    """The header of the Chunk record at ``offset`` (``head``: its first bytes).
-
-    Raises:
-        BadRecord: not a chunk, or its fields disagree with each other or the file size.
-    """
-    cur = _Cursor(head)
-    opcode, length = cur.unpack(_HEAD)
-    if opcode != OP_CHUNK:
-        raise BadRecord(f"expected a chunk record, found opcode 0x{opcode:02x}")
-    if offset + _HEAD.size + length > size:
-        raise BadRecord(f"chunk record of {length} bytes runs past the end of the file")
-    start, end, usize, crc = cur.unpack(_CHUNK_FIXED)
-    compression = cur.string()
-    csize = cur.u64()
-    if cur.pos + csize != _HEAD.size + length or end < start or usize > MAX_CHUNK_BYTES:
-        raise BadRecord("chunk header fields are inconsistent")
-    return ChunkHeader(start, end, usize, crc, compression, offset + cur.pos, csize, length + 9)
-
-
-def chunk_records(f: IO[bytes], ref: ChunkRef, size: int) -> bytes:
-    """The verified, decompressed records of a chunk.
-
-    Raises:
-        BadRecord: the chunk's header, compression or CRC is wrong.
-    """
-    head = parse_chunk_header(_read(f, ref.offset, 128), ref.offset, size)
-    if ref.indexed and (head.length, head.start_ns, head.end_ns) != (
-        ref.length,
-        ref.start_ns,
-        ref.end_ns,
-    ):
-        raise BadRecord("chunk header disagrees with the index")
-    data = _read(f, head.data_offset, head.data_size)
-    if head.compression == "zstd":
-        try:
-            if zstandard.frame_content_size(data) != head.uncompressed_size:
-                raise BadRecord("compressed data does not match the chunk's size")
-            records = zstandard.ZstdDecompressor().decompress(
-                data, max_output_size=head.uncompressed_size
-            )
-        except zstandard.ZstdError as err:
-            raise BadRecord(f"zstd: {err}") from None
-    elif head.compression == "":
-        records = data
-    else:
-        raise BadRecord(f"unknown compression {head.compression[:16]!r}")
-    if len(records) != head.uncompressed_size:
-        raise BadRecord("decompressed size differs from the chunk's")
-    if head.crc and zlib.crc32(records) != head.crc:
-        raise BadRecord("CRC mismatch")
-    return records
-
-
-def split_records(records: bytes) -> list[tuple[int, int, int]]:
-    """``(opcode, content start, content end)`` of each record in a chunk's records."""
-    out: list[tuple[int, int, int]] = []
-    pos, n, head = 0, len(records), _HEAD.unpack_from
-    while pos < n:
-        if pos + 9 > n:
-            raise BadRecord("a record inside the chunk is cut short")
-        opcode, length = head(records, pos)
-        start = pos + 9
-        pos = start + length
-        if pos > n:
-            raise BadRecord("a record inside the chunk runs past it")
-        out.append((opcode, start, pos))
-    return out
-
-
-def message_fields(records: bytes, start: int) -> tuple[int, int, int, int]:
-    """``(channel id, sequence, log time, publish time)`` of the Message content at ``start``."""
-    return _MSG.unpack_from(records, start)
-
-
-MESSAGE_HEAD = _MSG.size
-
-
-def count_messages(f: IO[bytes], ref: ChunkRef, channel_id: int, size: int) -> int | None:
-    """Messages of ``channel_id`` in a chunk, from its Message Index record (``None`` when
-    it has none or it is unreadable)."""
-    offset = ref.message_indexes.get(channel_id)
-    if offset is None or offset + 15 > size:
-        return None
-    opcode, length, channel, nbytes = struct.unpack("<BQHI", _read(f, offset, 15))
-    if opcode != OP_MESSAGE_INDEX or channel != channel_id or nbytes % 16 or nbytes + 6 != length:
-        return None
-    return nbytes // 16
-
-
 def check_data_section(f: IO[bytes], st: Structure) -> bool | None:
     """Check the Data End record's CRC of the whole data section (magic to Data End).
 
@@ -337,7 +90,7 @@ def check_data_section(f: IO[bytes], st: Structure) -> bool | None:
     at = st.summary_start - 13  # Data End: opcode, length 4, CRC, right before the summary
     if not st.indexed or at < len(MAGIC):
         return None
-    opcode, length, crc = struct.unpack("<BQI", _read(f, at, 13))
+    opcode, length, crc = struct.unpack("<BQI", read_at(f, at, 13))
     if opcode != OP_DATA_END or length != 4 or crc == 0:
         return None
     value, pos = 0, 0
@@ -349,6 +102,13 @@ def check_data_section(f: IO[bytes], st: Structure) -> bool | None:
         value = zlib.crc32(block, value)
         pos += len(block)
     return value == crc
+
+
+_FOOTER = struct.Struct("<BQQQI")
+_KNOWN_OPS = frozenset(range(OP_HEADER, OP_DATA_END + 1))
+_SMALL_OPS = frozenset((OP_HEADER, OP_SCHEMA, OP_CHANNEL, OP_METADATA, OP_ATTACHMENT))
+_ZSTD_FIELD = b"\x04\x00\x00\x00zstd"  # a chunk header's compression string
+_ZSTD_AT = HEAD.size + CHUNK_FIXED.size  # where it stands in a chunk record
 
 
 # -- opening -------------------------------------------------------------------------------
@@ -371,23 +131,23 @@ def _from_summary(f: IO[bytes], st: Structure) -> str | None:
     """Fill ``st`` from the summary; returns why it cannot be used (``None``: it was)."""
     size = st.size
     footer_at = size - len(MAGIC) - _FOOTER.size
-    if footer_at < len(MAGIC) or _read(f, size - len(MAGIC), len(MAGIC)) != MAGIC:
+    if footer_at < len(MAGIC) or read_at(f, size - len(MAGIC), len(MAGIC)) != MAGIC:
         return "no footer"
-    opcode, length, summary_start, _, crc = _FOOTER.unpack(_read(f, footer_at, _FOOTER.size))
+    opcode, length, summary_start, _, crc = _FOOTER.unpack(read_at(f, footer_at, _FOOTER.size))
     if opcode != OP_FOOTER or length != 20 or not len(MAGIC) < summary_start <= footer_at:
         return "footer damaged"
     st.summary_start = summary_start
-    blob = _read(f, summary_start, footer_at + _FOOTER.size - 4 - summary_start)
+    blob = read_at(f, summary_start, footer_at + _FOOTER.size - 4 - summary_start)
     if crc and zlib.crc32(blob) != crc:
         return "summary CRC mismatch"
-    cur = _Cursor(blob, 0, footer_at - summary_start)
+    cur = Cursor(blob, 0, footer_at - summary_start)
     meta_index: list[tuple[int, int, str]] = []
     attach_index: list[tuple[int, int, str]] = []
     try:
         while cur.pos < cur.end:
-            opcode, length = cur.unpack(_HEAD)
+            opcode, length = cur.unpack(HEAD)
             content = cur.take(length)
-            body = _Cursor(content)
+            body = Cursor(content)
             if opcode == OP_SCHEMA:
                 sch = parse_schema(content)
                 st.schemas[sch.id] = sch
@@ -426,8 +186,8 @@ def _load_side_record(
     try:
         if offset + length > st.size or length < 9:
             raise BadRecord("the index points past the end of the file")
-        rec = _read(f, offset, length)
-        op, content_length = _HEAD.unpack_from(rec)
+        rec = read_at(f, offset, length)
+        op, content_length = HEAD.unpack_from(rec)
         if op != opcode or content_length != length - 9:
             raise BadRecord("record header damaged")
         _add_side_record(st, opcode, rec[9:], offset)
@@ -451,11 +211,11 @@ def _scan(f: IO[bytes], st: Structure) -> None:
     size, pos = st.size, len(MAGIC)
     last_chunk: ChunkRef | None = None
     while pos < size:
-        head = _read(f, pos, 9)
+        head = read_at(f, pos, 9)
         if len(head) < 9:
             st.damage.add(Loss("tail", pos, "the file ends inside a record", frames=None))
             break
-        opcode, length = _HEAD.unpack(head)
+        opcode, length = HEAD.unpack(head)
         end = pos + 9 + length
         if opcode == OP_CHUNK and end > size:
             _lost_tail(f, st, pos)
@@ -463,7 +223,7 @@ def _scan(f: IO[bytes], st: Structure) -> None:
         well_formed = opcode in _KNOWN_OPS and end <= size
         if well_formed and opcode == OP_CHUNK:
             try:
-                hdr = parse_chunk_header(_read(f, pos, 128), pos, size)
+                hdr = parse_chunk_header(read_at(f, pos, 128), pos, size)
             except BadRecord:
                 well_formed = False
             else:
@@ -472,7 +232,7 @@ def _scan(f: IO[bytes], st: Structure) -> None:
         elif well_formed and opcode == OP_MESSAGE_INDEX:
             well_formed = _well_formed_index(f, pos, length)
             if well_formed and last_chunk is not None:
-                channel = _U16.unpack(_read(f, pos + 9, 2))[0]
+                channel = U16.unpack(read_at(f, pos + 9, 2))[0]
                 last_chunk.message_indexes.setdefault(channel, pos)
         elif well_formed and opcode in (OP_FOOTER, OP_DATA_END):
             st.good_bytes = end
@@ -501,11 +261,11 @@ def _scan_small_record(f: IO[bytes], st: Structure, opcode: int, pos: int, lengt
     (a bad CRC in a well-formed record costs that record only)."""
     part = {OP_METADATA: "metadata", OP_ATTACHMENT: "attachment"}.get(opcode, "record")
     try:
-        content = _read(f, pos + 9, length)
-        cur = _Cursor(content)
+        content = read_at(f, pos + 9, length)
+        cur = Cursor(content)
         if opcode == OP_HEADER:
             st.profile, st.library = cur.string(), cur.string()
-            _done(cur)
+            done(cur)
         elif opcode == OP_SCHEMA:
             sch = parse_schema(content)
             st.schemas[sch.id] = sch
@@ -527,7 +287,7 @@ def _well_formed_index(f: IO[bytes], pos: int, length: int) -> bool:
     """Whether the Message Index record at ``pos`` has a length its entries fill."""
     if length < 6:
         return False
-    nbytes = _U32.unpack(_read(f, pos + 11, 4))[0]
+    nbytes = U32.unpack(read_at(f, pos + 11, 4))[0]
     return bool(nbytes + 6 == length and nbytes % 16 == 0)
 
 
@@ -545,7 +305,7 @@ def _skipped(
 
 def _lost_tail(f: IO[bytes], st: Structure, pos: int) -> None:
     """The file ends inside the chunk at ``pos``: report what its header says it held."""
-    head = _read(f, pos, 128)
+    head = read_at(f, pos, 128)
     start = end = None
     if len(head) >= _ZSTD_AT:
         start_ns, end_ns = struct.unpack_from("<QQ", head, 9)
@@ -558,13 +318,13 @@ def _resync(f: IO[bytes], pos: int, size: int) -> tuple[int, int] | None:
     """``(offset, start_ns)`` of the first well-formed chunk at or after ``pos``."""
     block, origin = 4 << 20, pos
     while pos < size:
-        buf = _read(f, pos, block + len(_ZSTD_FIELD))
+        buf = read_at(f, pos, block + len(_ZSTD_FIELD))
         hit = buf.find(_ZSTD_FIELD)
         while hit >= 0:
             at = pos + hit - _ZSTD_AT
             if at >= origin:
                 try:
-                    hdr = parse_chunk_header(_read(f, at, 128), at, size)
+                    hdr = parse_chunk_header(read_at(f, at, 128), at, size)
                 except BadRecord:
                     pass
                 else:

@@ -19,7 +19,7 @@ from typing import IO, Any
 from mcap.records import Channel, Message, Schema
 
 from flowrun.errors import RecordingError
-from flowrun.recording import mcap_read, schema
+from flowrun.recording import mcap_read, mcap_records, schema
 from flowrun.recording.damage import DamageReport, Loss
 from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
 from flowrun.recording.mcap_file import OP_CHANNEL, OP_MESSAGE, OP_SCHEMA
@@ -132,12 +132,12 @@ class McapLog:
                 records = self._chunk(f, ref)
                 if records is None:
                     continue
-                for opcode, start, end in mcap_read.split_records(records):
+                for opcode, start, end in mcap_records.split_records(records):
                     if opcode == OP_SCHEMA:
-                        sch = mcap_read.parse_schema(records[start:end])
+                        sch = mcap_records.parse_schema(records[start:end])
                         self._schemas.setdefault(sch.id, sch)
                     elif opcode == OP_CHANNEL:
-                        ch = mcap_read.parse_channel(records[start:end])
+                        ch = mcap_records.parse_channel(records[start:end])
                         self._channels.setdefault(ch.id, ch)
                 if self._vehicles_ok():
                     return
@@ -185,18 +185,18 @@ class McapLog:
                 f"{schema.ENCODING!r} {schema.VEHICLES_TYPE!r}"
             )
 
-    def _chunk(self, f: IO[bytes], ref: mcap_read.ChunkRef) -> bytes | None:
+    def _chunk(self, f: IO[bytes], ref: mcap_records.ChunkRef) -> bytes | None:
         """A chunk's verified records, or ``None`` (recorded in :attr:`damage`, warned once)."""
         if ref.offset in self._lost_offsets:
             return None
         try:
-            return mcap_read.chunk_records(f, ref, self.file_bytes)
-        except (mcap_read.BadRecord, OSError, MemoryError) as err:
+            return mcap_records.chunk_records(f, ref, self.file_bytes)
+        except (mcap_records.BadRecord, OSError, MemoryError) as err:
             self._lost_offsets.add(ref.offset)
             vehicles = self._channel_id(schema.VEHICLES_TOPIC)
             frames = None
             if vehicles is not None:
-                frames = mcap_read.count_messages(f, ref, vehicles, self.file_bytes)
+                frames = mcap_records.count_messages(f, ref, vehicles, self.file_bytes)
             loss = Loss("chunk", ref.offset, str(err), ref.start_ns / 1e9, ref.end_ns / 1e9, frames)
             if self.damage.add(loss):
                 log.warning("%s: %s; the other chunks are read", self.path, loss.describe())
@@ -261,7 +261,7 @@ class McapLog:
         if start_ns is not None and end_ns is not None and end_ns < start_ns:
             return
         wanted = None if topics is None else set(topics)
-        unpack, head = mcap_read.message_fields, mcap_read.MESSAGE_HEAD
+        unpack, head = mcap_records.message_fields, mcap_records.MESSAGE_HEAD
         with open(self.path, "rb") as f:
             for ref in self._st.chunks:
                 if (start_ns is not None and ref.end_ns < start_ns) or (
@@ -272,7 +272,7 @@ class McapLog:
                 if records is None:
                     continue
                 keep = self._wanted_channels(wanted)
-                for opcode, start, end in mcap_read.split_records(records):
+                for opcode, start, end in mcap_records.split_records(records):
                     if opcode == OP_MESSAGE:
                         channel_id, sequence, log_time, publish_time = unpack(records, start)
                         channel = keep.get(channel_id)
@@ -291,10 +291,10 @@ class McapLog:
                         )
                         yield self._schemas.get(channel.schema_id), channel, msg
                     elif opcode == OP_SCHEMA:
-                        sch = mcap_read.parse_schema(records[start:end])
+                        sch = mcap_records.parse_schema(records[start:end])
                         self._schemas.setdefault(sch.id, sch)
                     elif opcode == OP_CHANNEL:
-                        ch = mcap_read.parse_channel(records[start:end])
+                        ch = mcap_records.parse_channel(records[start:end])
                         if ch.id not in self._channels:
                             self._channels[ch.id] = ch
                             keep = self._wanted_channels(wanted)
