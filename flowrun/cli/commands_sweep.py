@@ -61,6 +61,16 @@ def _stop_requests() -> Iterator[list[int]]:
             signal.signal(s, h)
 
 
+def _term_with_parent() -> None:
+    """In a point's process (Linux): SIGTERM when the sweep dies, even by SIGKILL, so no point
+    runs on unsupervised; it then finishes its log and says ``interrupted``."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
 class _Job:
     """One running point: its process and where its stderr goes."""
 
@@ -73,6 +83,7 @@ class _Job:
             stdout=subprocess.DEVNULL,
             stderr=self.stderr,
             start_new_session=True,  # a terminal's Ctrl-C reaches the sweep, not the points
+            preexec_fn=_term_with_parent,
         )
 
     def result(self) -> tuple[int, str]:

@@ -246,7 +246,10 @@ def _run(
     try:
         experiment.run(runs, n_steps, seed=seed)
     except BaseException as err:
-        env.close()
+        try:
+            env.close()
+        except Exception as again:  # SUMO may be gone already: report what stopped the run
+            log.info("closing the environment failed too: %s", again)
         status = INTERRUPTED if isinstance(err, KeyboardInterrupt) else FAILED
         try:
             write_json(run_dir / "metrics.json", summary(status))
