@@ -279,7 +279,8 @@ def _build_network(cfg: ExperimentConfig, loc: Locations) -> Any:
         return None
     try:
         cls = find(cfg.network.type)
-        network = cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial)
+        tls = cfg.traffic_lights.programs  # a network may make the nodes with lights ones
+        network = cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial, tls)
     except ConfigError as err:
         message = f"{err.location}: {err.message}" if err.location else err.message
         raise loc.error(message, ("network", *_sub_path(err.path))) from None
