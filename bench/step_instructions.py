@@ -14,6 +14,9 @@ Modes:
     merge_raw  the merge's floor, as ``bench/open_networks.py``'s (a): flowrun builds the files
          and inserts the placed cars, then only ``simulationStep`` (two per "step") runs, and
          each entering car gets its type's speed and lane-change modes.
+    grid, grid_raw  Flow's grid0 benchmark (3x3 lights, 300 veh/h per entering edge):
+         ``TrafficLightGridBenchmarkEnv`` with seeded random switch actions, and SUMO alone
+         on the same files running its own signal programs (as ``bench/grid.py``).
 """
 
 from __future__ import annotations
@@ -22,8 +25,11 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
 from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
+from flowrun.envs.grid_defaults import grid_config
 from flowrun.experiment.runner import Experiment
 from flowrun.recording.writer import McapRecorder
 
@@ -53,6 +59,21 @@ def main() -> None:
                 speed_mode, lane_change_mode = modes.get(api.vehicle.getTypeID(vid), (31, 1621))
                 api.vehicle.setSpeedMode(vid, speed_mode)
                 api.vehicle.setLaneChangeMode(vid, lane_change_mode)
+        env.close()
+        return
+    if mode in ("grid", "grid_raw"):
+        env = make_env(grid_config(3, 3))
+        env.reset(seed=0)
+        if mode == "grid_raw":
+            assert env.k.process is not None
+            api = env.k.process.api
+            for _ in range(steps):
+                api.simulationStep()
+        else:
+            rng = np.random.default_rng(0)
+            n_actions = env.action_space.shape[0]  # type: ignore[index]
+            for _ in range(steps):
+                env.step(rng.uniform(-1, 1, n_actions).astype(np.float32))
         env.close()
         return
     if mode == "merge":

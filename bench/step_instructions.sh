@@ -5,6 +5,7 @@
 # (~10 min)
 # Flow's merge0 (open network), per env step of two sims, and its SUMO-alone floor:
 #   MODES="merge_raw merge" STEPS="300 600" bash bench/step_instructions.sh
+# Flow's grid0 and its floor: MODES="grid_raw grid" STEPS="300 600" bash bench/step_instructions.sh
 #
 # Each mode runs twice (500 and 2,500 steps); the difference / 2,000 is the cost of one step,
 # start-up cancelled out. The count is repeatable to the instruction only with: one BLAS
@@ -22,15 +23,17 @@ count() {  # mode steps -> instructions of the whole process
     | awk '/Collected/ {gsub(",", "", $4); print $4}'
 }
 "$PY" bench/step_instructions.py raw 10  # compile every module once, outside the counts
-per_raw=0 per_exp=0 per_rec=0 per_merge_raw=0 per_merge=0
-for mode in ${MODES:-raw exp rec}; do  # raw exp rec merge_raw merge
+per_raw=0 per_exp=0 per_rec=0 per_merge_raw=0 per_merge=0 per_grid_raw=0 per_grid=0
+for mode in ${MODES:-raw exp rec}; do  # raw exp rec merge_raw merge grid_raw grid
   a=$(count "$mode" "$SHORT"); b=$(count "$mode" "$LONG")
   per=$(( (b - a) / (LONG - SHORT) ))
   echo "$mode: $per instructions/step"
   eval "per_$mode=$per"
 done
 awk -v r="$per_raw" -v e="$per_exp" -v c="$per_rec" -v mr="$per_merge_raw" -v m="$per_merge" \
+  -v gr="$per_grid_raw" -v g="$per_grid" \
   'BEGIN { if (r > 0) {
   if (e > 0) printf "no recording / raw SUMO = %.2f (instructions)\n", e / r
   if (c > 0) printf "recording / raw SUMO = %.2f (instructions)\n", c / r }
-  if (mr > 0 && m > 0) printf "merge / merge SUMO alone = %.2f (instructions)\n", m / mr }'
+  if (mr > 0 && m > 0) printf "merge / merge SUMO alone = %.2f (instructions)\n", m / mr
+  if (gr > 0 && g > 0) printf "grid0 / grid0 SUMO alone = %.2f (instructions)\n", g / gr }'
