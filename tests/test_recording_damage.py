@@ -282,3 +282,17 @@ def test_the_data_section_crc_is_checked_where_the_writer_stored_one(
     assert not log.damage  # nothing else notices: the index entries are not used
     assert [x.part for x in log.verify().losses] == ["data section"]
     assert _messages(bad) == _messages(good)
+
+
+def test_a_window_read_does_not_trust_the_times_of_a_damaged_scanned_chunk(
+    intact: Intact, tmp_path: Path
+) -> None:
+    summary_start = struct.unpack_from("<Q", intact.data, len(intact.data) - 28)[0]
+    data = bytearray(intact.data[:summary_start])  # unfinished: chunk headers are scanned
+    headers = intact.regions["chunk header"]
+    middle = headers[61 * (len(headers) // 61 // 2)]  # the first byte of a middle chunk
+    data[middle + 9 + 7] ^= 0x40  # message_start_time's top byte (outside the chunk's CRC)
+    path = tmp_path / "times.mcap"
+    path.write_bytes(bytes(data))
+    want = [f.step for f in open_log(intact.path).frames(5.0, 25.0)]
+    assert [f.step for f in open_log(path).frames(5.0, 25.0)] == want

@@ -124,7 +124,17 @@ def read_structure(f: IO[bytes], size: int) -> Structure:
     if reason != "no footer":
         st.damage.add(Loss("index", size, f"{reason}; the data section was scanned instead"))
     _scan(f, st)
+    _check_time_order(st.chunks)
     return st
+
+
+def _check_time_order(chunks: list[ChunkRef]) -> None:
+    """Distrust the time fields of scanned chunk headers that are out of order (flowrun
+    writes chunks in time order), so a window read never skips a chunk because of them."""
+    for i, ref in enumerate(chunks):
+        lo = chunks[i - 1].end_ns if i else 0
+        hi = chunks[i + 1].start_ns if i + 1 < len(chunks) else 1 << 64
+        ref.times_trusted = lo <= ref.start_ns <= ref.end_ns <= hi
 
 
 def _from_summary(f: IO[bytes], st: Structure) -> str | None:
@@ -328,7 +338,8 @@ def _resync(f: IO[bytes], pos: int, size: int) -> tuple[int, int] | None:
                 except BadRecord:
                     pass
                 else:
-                    return at, hdr.start_ns
+                    if hdr.start_ns <= hdr.end_ns:
+                        return at, hdr.start_ns
             hit = buf.find(_ZSTD_FIELD, hit + 1)
         pos += block
     return None

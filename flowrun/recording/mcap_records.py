@@ -104,6 +104,9 @@ class ChunkRef:
             chunk's own header, unchecked until the chunk is read).
         message_indexes: channel id -> offset of its Message Index record (for counting
             what a damaged chunk held).
+        times_trusted: whether ``start_ns``/``end_ns`` may be used to skip the chunk when
+            reading a time window (false for a scanned header out of order with its
+            neighbours: its time fields, outside the chunk's CRC, may be damaged).
     """
 
     offset: int
@@ -112,6 +115,7 @@ class ChunkRef:
     end_ns: int
     indexed: bool
     message_indexes: dict[int, int] = field(default_factory=dict)
+    times_trusted: bool = True
 
 
 def read_at(f: IO[bytes], offset: int, n: int) -> bytes:
@@ -201,7 +205,7 @@ def parse_chunk_header(head: bytes, offset: int, size: int) -> ChunkHeader:
     start, end, usize, crc = cur.unpack(CHUNK_FIXED)
     compression = cur.string()
     csize = cur.u64()
-    if cur.pos + csize != HEAD.size + length or end < start or usize > MAX_CHUNK_BYTES:
+    if cur.pos + csize != HEAD.size + length or usize > MAX_CHUNK_BYTES:
         raise BadRecord("chunk header fields are inconsistent")
     return ChunkHeader(start, end, usize, crc, compression, offset + cur.pos, csize, length + 9)
 
@@ -213,11 +217,8 @@ def chunk_records(f: IO[bytes], ref: ChunkRef, size: int) -> bytes:
         BadRecord: the chunk's header, compression or CRC is wrong.
     """
     head = parse_chunk_header(read_at(f, ref.offset, 128), ref.offset, size)
-    if ref.indexed and (head.length, head.start_ns, head.end_ns) != (
-        ref.length,
-        ref.start_ns,
-        ref.end_ns,
-    ):
+    # (the header's time fields are outside the CRC and not needed: the index's are used)
+    if ref.indexed and head.length != ref.length:
         raise BadRecord("chunk header disagrees with the index")
     data = read_at(f, head.data_offset, head.data_size)
     if head.compression == "zstd":

@@ -228,7 +228,7 @@ class McapLog:
     @property
     def time_range(self) -> tuple[float, float] | None:
         """First and last logged simulation time, s (``None`` for an empty log)."""
-        chunks = self._st.chunks
+        chunks = [c for c in self._st.chunks if c.times_trusted] or self._st.chunks
         if not chunks:
             return None
         return min(c.start_ns for c in chunks) / 1e9, max(c.end_ns for c in chunks) / 1e9
@@ -264,8 +264,9 @@ class McapLog:
         unpack, head = mcap_records.message_fields, mcap_records.MESSAGE_HEAD
         with open(self.path, "rb") as f:
             for ref in self._st.chunks:
-                if (start_ns is not None and ref.end_ns < start_ns) or (
-                    end_ns is not None and ref.start_ns > end_ns
+                if ref.times_trusted and (
+                    (start_ns is not None and ref.end_ns < start_ns)
+                    or (end_ns is not None and ref.start_ns > end_ns)
                 ):
                     continue
                 records = self._chunk(f, ref)
