@@ -274,7 +274,7 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--reps", type=int, default=5, help="repetitions of the merge (median)")
     p.add_argument("--big-reps", type=int, default=3, help="repetitions per highway size")
-    p.add_argument("--sizes", default="250,500,1000,2000", help="highway sizes, cars")
+    p.add_argument("--sizes", default="250,500,1000,2000", help="highway sizes, cars (\"\": none)")
     p.add_argument("--steps", type=int, default=200, help="timed steps per highway size")
     args = p.parse_args()
     print(
@@ -289,7 +289,7 @@ def main() -> None:
     report(merge, measure(merge, args.reps))
     summary = []
     with tempfile.TemporaryDirectory() as folder:
-        for cars in (int(s) for s in args.sizes.split(",")):
+        for cars in (int(s) for s in args.sizes.split(",") if s.strip()):
             case = highway_case(cars, Path(folder), warmup=60, steps=args.steps)
             med = report(case, measure(case, args.big_reps))
             summary.append((cars, med))
