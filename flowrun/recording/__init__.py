@@ -1,5 +1,7 @@
-"""MCAP recording of per-step vehicle states: writer, reader (with salvage) and repair."""
+"""MCAP recording of per-step vehicle states: writer, CRC-checking reader (salvage around
+damage, with a report of what was lost) and repair."""
 
+from flowrun.recording.damage import DamageReport, Loss
 from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
 from flowrun.recording.reader import McapLog, open_log
 from flowrun.recording.repair import RepairReport, repair
@@ -11,6 +13,8 @@ __all__ = [
     "SIGNALS_TOPIC",
     "STATS_TOPIC",
     "VEHICLES_TOPIC",
+    "DamageReport",
+    "Loss",
     "McapLog",
     "McapRecorder",
     "RepairReport",
