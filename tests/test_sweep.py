@@ -105,6 +105,27 @@ def test_a_cut_or_interrupted_point_is_not_taken_for_finished(tmp_path: Path) ->
     assert finished_folder(plan, point) == folder
 
 
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["--grid", "network.length=230,5"], "with --grid network.length=5: "),
+        (["--grid", "network.lenth=230"], "did you mean 'length'"),
+        (["--grid", "network.length=230", "--metric", "outflw"], "did you mean 'outflow'"),
+        (["--grid", "network.length=230", "--seeds", "0"], "--seeds must be >= 1"),
+        (["--grid", "network.length=230", "--jobs", "0"], "--jobs must be >= 1"),
+    ],
+)
+def test_a_bad_sweep_is_one_line_before_anything_runs(
+    tmp_path: Path, args: list[str], needle: str
+) -> None:
+    out = tmp_path / "runs"
+    result = CliRunner().invoke(app, ["sweep", str(SUGIYAMA), "--out", str(out), *args])
+    assert result.exit_code == 1
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0], lines
+    assert not out.exists()
+
+
 # --- real sweeps -------------------------------------------------------------------------------
 
 
