@@ -165,12 +165,47 @@ def test_bottleneck_env_rewards_the_outflow() -> None:
         assert np.mean(rewards[:50]) == 0.0  # nobody has reached the end yet
 
 
-def test_bottleneck_env_refuses_flows_toll_booth() -> None:
+def test_toll_booth_needs_a_traffic_light_on_node_2() -> None:
     with (
-        pytest.raises(ConfigError, match="toll booth"),
+        pytest.raises(ConfigError, match="traffic light on node '2'"),
         env_of("bottleneck", "env.additional_params.disable_tb=false"),
     ):
         pass
+
+
+@pytest.mark.parametrize(("key", "node", "edge", "past"), [
+    ("disable_ramp_metering", "3", "2", "3"),  # ALINEA: cars held 80 m before node 3
+    ("disable_tb", "2", "1", "2"),  # toll booth: cars held 10 m into edge 1
+])  # fmt: skip
+def test_flows_ramp_meter_and_toll_booth_switch_their_lights(
+    key: str, node: str, edge: str, past: str
+) -> None:
+    with env_of("bottleneck", f"env.additional_params.{key}=false", "env.horizon=400",
+                f"traffic_lights={{lights: [{{node_id: '{node}'}}]}}") as env:  # fmt: skip
+        env.reset(seed=0)
+        vk, tl = env.k.vehicle, env.k.traffic_light
+        states, held_ok, qs = set(), 0, []
+        before: dict[str, str] = {}
+        for _ in range(400):
+            _, _, terminated, _, _ = env.step(None)
+            assert not terminated
+            states.add(tl.get_state(node))
+            now = {vid: vk.get_edge(vid) for vid in vk.get_ids()}
+            for vid in vk.get_ids():
+                mode = vk.get_lane_change_mode(vid)
+                if now[vid] == before.get(vid) == past:  # past the light: its own mode again
+                    assert mode == 1621
+                if vid in (env.ramp_meter or env.toll_booth).lanes.held:
+                    # held from `edge` until the step after it reached `past`
+                    assert mode == 512 and (now[vid] == edge or before.get(vid) != past)
+                    held_ok += 1
+            before = now
+            if env.ramp_meter is not None:
+                qs.append(env.ramp_meter.q)
+        assert held_ok > 100
+        assert "GGGG" in states and any("r" in s for s in states)
+        if qs:  # ALINEA moved the metered flow within Flow's bounds
+            assert 275.0 == min(qs) < max(qs) <= 1100.0
 
 
 def test_desired_velocity_env_is_flows_bottleneck0() -> None:

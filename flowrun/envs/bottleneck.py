@@ -17,12 +17,13 @@ import numpy as np
 from gymnasium.spaces import Box
 
 from flowrun.envs.base import Env
+from flowrun.envs.bottleneck_control import MAX_LANES, RampMeter, TollBooth
 from flowrun.errors import ConfigError
 
-#: Flow's constants: the largest number of lanes per unit of ``scaling``, the edges in
-#: driving order, the length of the bottleneck (edge ``4``, m), and the vehicle count
-#: and speed (m/s) that normalise observations.
-MAX_LANES = 4
+__all__ = ["ADDITIONAL_ENV_PARAMS", "MAX_LANES", "BottleneckEnv"]
+
+#: Flow's constants: the edges in driving order, the length of the bottleneck (edge ``4``,
+#: m), and the vehicle count that normalises observations.
 EDGE_LIST = ("1", "2", "3", "4", "5")
 BOTTLENECK_LEN = 280.0
 NUM_VEHICLE_NORM = 20.0
@@ -35,26 +36,33 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     # steps an AV waits after a lane change before it may change again (Flow's counter
     # counts simulation steps although its comment says seconds)
     "lane_change_duration": 5,
-    # Flow's toll booth on node 2 (disabled; flowrun has no toll booth: must stay true)
+    # no toll booth (false: Flow's toll booth, a traffic light on node 2)
     "disable_tb": True,
-    # Flow's ALINEA ramp meter on node 3 (disabled; flowrun has none: must stay true)
+    # no ramp meter (false: Flow's ALINEA ramp meter, a traffic light on node 3)
     "disable_ramp_metering": True,
 }
 
+#: the node each of Flow's controls needs a traffic light on
+CONTROL_NODES = {"disable_tb": ("2", "toll booth"), "disable_ramp_metering": ("3", "ramp meter")}
 
-def check_disabled(params: dict[str, Any]) -> None:
-    """Refuse Flow's toll booth and ramp meter, which flowrun does not model.
+
+def enabled_controls(params: dict[str, Any], lights: set[str]) -> set[str]:
+    """Which of Flow's controls (``disable_tb``, ``disable_ramp_metering``) are on.
 
     Raises:
-        ConfigError: ``disable_tb`` or ``disable_ramp_metering`` is not true.
+        ConfigError: a control is on but its node has no traffic light.
     """
-    for key, what in (("disable_tb", "toll booth"), ("disable_ramp_metering", "ramp meter")):
-        if params.get(key, True) is not True:
-            raise ConfigError(
-                f"flowrun's bottleneck has no {what} (Flow's is off by default too); "
-                f"set {key}: true",
-                path=f"env.additional_params.{key}",
-            )
+    on = set()
+    for key, (node, what) in CONTROL_NODES.items():
+        if not params.get(key, True):
+            if node not in lights:
+                raise ConfigError(
+                    f"the {what} ({key}: false) switches a traffic light on node {node!r}; "
+                    f"add one (traffic_lights: {{lights: [{{node_id: '{node}'}}]}})",
+                    path=f"env.additional_params.{key}",
+                )
+            on.add(key)
+    return on
 
 
 class BottleneckEnv(Env):
@@ -72,17 +80,22 @@ class BottleneckEnv(Env):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        check_disabled(self.env_params.additional_params)
+        lights = set(self.network.traffic_lights.get_properties())
+        self._controls = enabled_controls(self.env_params.additional_params, lights)
         #: Flow's factor multiplying the number of lanes
         self.scaling = int(self.net_params.additional_params.get("scaling", 1))
         #: cars on the bottleneck edge ``4`` at each of the last 10 simulation steps
         self.smoothed_num: deque[int] = deque([0] * 10, maxlen=10)
+        self.toll_booth: TollBooth | None = None
+        self.ramp_meter: RampMeter | None = None
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
-        """Start a new episode (the edge-``4`` counts start at zero)."""
+        """Start a new episode (the edge-``4`` counts start at zero; the toll booth's waits
+        are drawn from the env's seeded generator)."""
         self.smoothed_num = deque([0] * 10, maxlen=10)
+        self.toll_booth = self.ramp_meter = None  # new ones at the episode's first step
         return super().reset(seed=seed, options=options)
 
     @property
@@ -103,7 +116,18 @@ class BottleneckEnv(Env):
         return np.ones(1)
 
     def additional_command(self) -> None:
-        """Count the cars in the bottleneck (edge ``4``) for :meth:`get_bottleneck_density`."""
+        """Flow's: run the toll booth and the ramp meter if on, count the cars on edge ``4``."""
+        on = self._controls
+        if "disable_tb" in on:
+            if self.toll_booth is None:
+                rng = np.random.default_rng(int(self.np_random.integers(2**63 - 1)))
+                self.toll_booth = TollBooth(self.scaling, self.sim_step, rng)
+            self.toll_booth.step(self.k)
+        if "disable_ramp_metering" in on:
+            if self.ramp_meter is None:
+                p = self.env_params.additional_params
+                self.ramp_meter = RampMeter(self.scaling, self.sim_step, p)
+            self.ramp_meter.step(self.k, list(self.smoothed_num))
         self.smoothed_num.append(len(self.k.vehicle.get_ids_by_edge("4")))
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:

@@ -203,6 +203,14 @@ class VehicleCommands:
         return self.lane_change_log().total
 
     # ------------------------------------------------------------------ Flow's other commands
+    def set_lane_change_mode(self, veh_id: str, mode: int) -> None:
+        """Set the car's SUMO ``laneChangeMode`` (a Flow mode's int), at once."""
+        self.api.vehicle.setLaneChangeMode(veh_id, int(mode))
+
+    def get_lane_change_mode(self, veh_id: str) -> int:
+        """The car's SUMO ``laneChangeMode``."""
+        return int(self.api.vehicle.getLaneChangeMode(veh_id))
+
     def set_max_speed(self, veh_id: str, max_speed: float) -> None:
         """Set the car's maximum speed, m/s (SUMO's ``setMaxSpeed``, at once)."""
         self.api.vehicle.setMaxSpeed(veh_id, float(max_speed))

@@ -5,7 +5,8 @@ Five straight edges along the x axis, named as in Flow: ``1`` (100 m) -> ``2`` (
 ``5`` (155 m, ``scaling`` lanes). Nodes ``1`` .. ``6`` sit at Flow's x = 0, 100, 410, 550, 830,
 985 m; ``4`` and ``5`` are SUMO *zipper* junctions (radius 20 m), where lane ``i`` of the wider
 edge feeds lane ``floor(i / 2)`` of the narrower one, so two lanes merge alternately into
-one. Cars enter on ``1`` from inflows; every start edge routes to the end of ``5``.
+one. Cars enter on ``1`` from inflows; every start edge routes to the end of ``5``. A node
+named in the traffic lights (Flow's toll booth at ``2``, ramp meter at ``3``) becomes one.
 
 Positions along the network (``get_x_by_id``) run through the junctions: each edge starts
 where the one before it ends plus the junction's internal link (measured on SUMO 1.28), so
@@ -69,9 +70,15 @@ def bottleneck_edge_starts(links: tuple[float, float, float, float]) -> dict[str
     return starts
 
 
-def bottleneck_spec(scaling: int, speed_limit: float) -> NetworkSpec:
-    """Nodes, edges, zipper connections and routes of the bottleneck (module docstring)."""
-    nodes = tuple(Node(i, x, 0.0, kind, radius) for i, x, kind, radius in NODES)
+def bottleneck_spec(
+    scaling: int, speed_limit: float, lights: frozenset[str] = frozenset()
+) -> NetworkSpec:
+    """Nodes, edges, zipper connections and routes of the bottleneck (module docstring);
+    the nodes in ``lights`` are traffic lights (Flow's toll booth ``2``, ramp meter ``3``)."""
+    nodes = tuple(
+        Node(i, x, 0.0, "traffic_light" if i in lights else kind, radius)
+        for i, x, kind, radius in NODES
+    )
     edges = tuple(
         Edge(eid, a, b, length, lanes * scaling, speed_limit) for eid, a, b, length, lanes in EDGES
     )
@@ -117,7 +124,8 @@ class BottleneckNetwork(Network):
     def build_spec(self) -> NetworkSpec:
         """The bottleneck's nodes, edges, connections and routes."""
         self.scaling = int(self.params["scaling"])
-        return bottleneck_spec(self.scaling, float(self.params["speed_limit"]))
+        lights = frozenset(self.traffic_lights.get_properties())  # Flow: named nodes get one
+        return bottleneck_spec(self.scaling, float(self.params["speed_limit"]), lights)
 
     def get_bottleneck_lanes(self, lane: int) -> list[int]:
         """Flow's: the lanes lane ``lane`` of edge ``3`` becomes on edges ``4`` and ``5``."""
