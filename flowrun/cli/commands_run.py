@@ -107,9 +107,11 @@ def baseline(
 ) -> None:
     """Run a non-RL experiment: N runs of the config's environment, a table, MCAP logs.
 
-    CONFIG is a YAML file or a Flow config module (a .py file defining flow_params). The run
-    folder is OUT/<name>/<timestamp>-<seed>/; its status.json says running, complete,
-    interrupted or failed. Ctrl-C or SIGTERM finishes the logs and exits 130 / 143.
+    CONFIG is a YAML file or a Flow config module (a .py file defining flow_params).
+
+    Run folder: OUT/<name>/<timestamp>-<seed>/ (status.json: running/complete/interrupted/failed).
+
+    Ctrl-C or SIGTERM finishes the logs and exits 130 / 143.
     """
     from flowrun.config.flow_module import load_any_config
     from flowrun.experiment.baseline import resolve_steps, run_baseline
