@@ -217,10 +217,11 @@ def sweep(
 ) -> None:
     """Run a baseline for every combination of --grid values (x --seeds), in parallel.
 
-    Each point gets its own run folder in the sweep folder (out/<name>/sweep-<id>/); then
-    results.csv, results.md and <metric>.png (the metric against the first --grid key, mean
-    and std over seeds). Interrupted, finished points are kept: the same command again runs
-    only the rest.
+    Each point is a run folder in OUT/<name>/sweep-<id>/, named after its values.
+
+    Then results.csv, results.md and <metric>.png (mean and std over seeds vs the first key).
+
+    Ctrl-C/SIGTERM keeps finished points (exit 130/143); the same command runs only the rest.
     """
     from flowrun.config.flow_module import load_any_config
     from flowrun.experiment import sweep as sw
