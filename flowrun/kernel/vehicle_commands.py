@@ -119,6 +119,7 @@ class VehicleCommands:
     _next_reroute: np.ndarray
     _route_end: np.ndarray
     _route_of: dict[str, tuple[str, ...]]
+    _pending_removal: list[str]
     _lanes: LaneTable | None
     _edge_by_id: dict[str, Edge]
     _multi_lane: bool
@@ -233,7 +234,10 @@ class VehicleCommands:
 
         if edge not in self.spec.routes and edge not in self.spec.route_choices:
             raise ValueError(f"no route starts on edge {edge!r}; known: {sorted(self.spec.routes)}")
-        if veh_id in self.table or veh_id in self.api.simulation.getPendingVehicles():
+        leaving = veh_id in self._pending_removal  # removed this step: may come back (Flow)
+        if (veh_id in self.table and not leaving) or (
+            veh_id in self.api.simulation.getPendingVehicles()
+        ):
             return False
         self.api.vehicle.add(
             veh_id, route_name(edge), typeID=str(type_id), depart="now",
