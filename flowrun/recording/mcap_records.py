@@ -17,13 +17,21 @@ from typing import IO
 import zstandard
 from mcap.records import Channel, Schema
 
-from flowrun.recording.mcap_file import CRC_KEY, OP_CHUNK, OP_MESSAGE_INDEX, metadata_crc
+from flowrun.recording.mcap_file import (
+    CRC_KEY,
+    OP_CHUNK,
+    OP_MESSAGE,
+    OP_MESSAGE_INDEX,
+    metadata_crc,
+)
 
 U16 = struct.Struct("<H")
 U32 = struct.Struct("<I")
 _U64 = struct.Struct("<Q")
 HEAD = struct.Struct("<BQ")
 _MSG = struct.Struct("<HIQQ")
+MESSAGE_HEAD = _MSG.size
+"""Bytes of a Message record's content before its data."""
 CHUNK_FIXED = struct.Struct("<QQQI")
 MAX_CHUNK_BYTES = 1 << 31
 """Largest uncompressed chunk accepted (a damaged size field must not allocate more)."""
@@ -253,6 +261,8 @@ def split_records(records: bytes) -> list[tuple[int, int, int]]:
         pos = start + length
         if pos > n:
             raise BadRecord("a record inside the chunk runs past it")
+        if opcode == OP_MESSAGE and length < MESSAGE_HEAD:
+            raise BadRecord("a message inside the chunk is too short")
         out.append((opcode, start, pos))
     return out
 
@@ -260,9 +270,6 @@ def split_records(records: bytes) -> list[tuple[int, int, int]]:
 def message_fields(records: bytes, start: int) -> tuple[int, int, int, int]:
     """``(channel id, sequence, log time, publish time)`` of the Message content at ``start``."""
     return _MSG.unpack_from(records, start)
-
-
-MESSAGE_HEAD = _MSG.size
 
 
 def count_messages(f: IO[bytes], ref: ChunkRef, channel_id: int, size: int) -> int | None:

@@ -14,7 +14,7 @@ import math
 import os
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, NamedTuple
 
 from mcap.records import Channel, Message, Schema
 
@@ -31,6 +31,16 @@ log = logging.getLogger(__name__)
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 MessageTriple = tuple[Schema | None, Channel, Message]
+
+
+class _Chunk(NamedTuple):
+    """A verified chunk: its records, their ``(opcode, start, end)``, and the schemas and
+    channels it holds (the mcap library's writer puts them in chunks)."""
+
+    records: bytes
+    spans: list[tuple[int, int, int]]
+    schemas: list[Schema]
+    channels: list[Channel]
 
 
 def _mib(n: int) -> str:
@@ -129,16 +139,13 @@ class McapLog:
             return
         with open(self.path, "rb") as f:
             for ref in self._st.chunks[:8]:
-                records = self._chunk(f, ref)
-                if records is None:
+                chunk = self._chunk(f, ref)
+                if chunk is None:
                     continue
-                for opcode, start, end in mcap_records.split_records(records):
-                    if opcode == OP_SCHEMA:
-                        sch = mcap_records.parse_schema(records[start:end])
-                        self._schemas.setdefault(sch.id, sch)
-                    elif opcode == OP_CHANNEL:
-                        ch = mcap_records.parse_channel(records[start:end])
-                        self._channels.setdefault(ch.id, ch)
+                for sch in chunk.schemas:
+                    self._schemas.setdefault(sch.id, sch)
+                for ch in chunk.channels:
+                    self._channels.setdefault(ch.id, ch)
                 if self._vehicles_ok():
                     return
         # McapRecorder (library "flowrun") registers vehicles = 1 and stats = 2 first
@@ -185,12 +192,20 @@ class McapLog:
                 f"{schema.ENCODING!r} {schema.VEHICLES_TYPE!r}"
             )
 
-    def _chunk(self, f: IO[bytes], ref: mcap_records.ChunkRef) -> bytes | None:
+    def _chunk(self, f: IO[bytes], ref: mcap_records.ChunkRef) -> _Chunk | None:
         """A chunk's verified records, or ``None`` (recorded in :attr:`damage`, warned once)."""
         if ref.offset in self._lost_offsets:
             return None
         try:
-            return mcap_records.chunk_records(f, ref, self.file_bytes)
+            records = mcap_records.chunk_records(f, ref, self.file_bytes)
+            spans = mcap_records.split_records(records)
+            schemas = [
+                mcap_records.parse_schema(records[a:b]) for op, a, b in spans if op == OP_SCHEMA
+            ]
+            channels = [
+                mcap_records.parse_channel(records[a:b]) for op, a, b in spans if op == OP_CHANNEL
+            ]
+            return _Chunk(records, spans, schemas, channels)
         except (mcap_records.BadRecord, OSError, MemoryError) as err:
             self._lost_offsets.add(ref.offset)
             vehicles = self._channel_id(schema.VEHICLES_TOPIC)
@@ -269,36 +284,34 @@ class McapLog:
                     or (end_ns is not None and ref.start_ns > end_ns)
                 ):
                     continue
-                records = self._chunk(f, ref)
-                if records is None:
+                chunk = self._chunk(f, ref)
+                if chunk is None:
                     continue
+                for sch in chunk.schemas:
+                    self._schemas.setdefault(sch.id, sch)
+                for ch in chunk.channels:
+                    self._channels.setdefault(ch.id, ch)
                 keep = self._wanted_channels(wanted)
-                for opcode, start, end in mcap_records.split_records(records):
-                    if opcode == OP_MESSAGE:
-                        channel_id, sequence, log_time, publish_time = unpack(records, start)
-                        channel = keep.get(channel_id)
-                        if channel is None:
-                            continue
-                        if (start_ns is not None and log_time < start_ns) or (
-                            end_ns is not None and log_time > end_ns
-                        ):
-                            continue
-                        msg = Message(
-                            channel_id=channel_id,
-                            sequence=sequence,
-                            log_time=log_time,
-                            publish_time=publish_time,
-                            data=records[start + head : end],
-                        )
-                        yield self._schemas.get(channel.schema_id), channel, msg
-                    elif opcode == OP_SCHEMA:
-                        sch = mcap_records.parse_schema(records[start:end])
-                        self._schemas.setdefault(sch.id, sch)
-                    elif opcode == OP_CHANNEL:
-                        ch = mcap_records.parse_channel(records[start:end])
-                        if ch.id not in self._channels:
-                            self._channels[ch.id] = ch
-                            keep = self._wanted_channels(wanted)
+                records = chunk.records
+                for opcode, start, end in chunk.spans:
+                    if opcode != OP_MESSAGE:
+                        continue
+                    channel_id, sequence, log_time, publish_time = unpack(records, start)
+                    channel = keep.get(channel_id)
+                    if channel is None:
+                        continue
+                    if (start_ns is not None and log_time < start_ns) or (
+                        end_ns is not None and log_time > end_ns
+                    ):
+                        continue
+                    msg = Message(
+                        channel_id=channel_id,
+                        sequence=sequence,
+                        log_time=log_time,
+                        publish_time=publish_time,
+                        data=records[start + head : end],
+                    )
+                    yield self._schemas.get(channel.schema_id), channel, msg
 
     def verify(self) -> DamageReport:
         """Read every chunk (checking its CRC) and the data section's CRC where the writer
