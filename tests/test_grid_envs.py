@@ -227,3 +227,39 @@ def test_po_edge_density_and_speed_equal_the_kernel_getters() -> None:
         assert seen > 20
     finally:
         env.close()
+
+
+def test_full_env_puts_cars_that_reach_an_exit_back_at_their_entry_as_flow() -> None:
+    from flowrun.config.params import InitialConfig
+    from flowrun.controllers import GridRouter, SimCarFollowingController
+    from flowrun.envs.traffic_light_grid import reentry_edges
+
+    assert reentry_edges(2, 3)["bot1_3"] == "bot1_0"
+    assert reentry_edges(2, 3)["left0_2"] == "left2_2"
+    vehicles = VehicleParams()
+    vehicles.add("human", acceleration_controller=(SimCarFollowingController, {}),
+                 routing_controller=(GridRouter, {}), num_vehicles=16)  # fmt: skip
+    cars = {f"cars_{side}": 2 for side in ("top", "bot", "left", "right")}
+    params = {"grid_array": {"row_num": 2, "col_num": 2, **cars, **LENGTHS}, "speed_limit": 20}
+    net = TrafficLightGridNetwork(
+        "g", vehicles, NetParams(additional_params=params), InitialConfig(spacing="custom")
+    )
+    extra = {"switch_time": 2.0, "tl_type": "actuated", "discrete": False}
+    env = TrafficLightGridEnv(
+        EnvParams(horizon=1000, additional_params=extra), SumoParams(sim_step=0.5, seed=0), net
+    )
+    try:
+        env.reset(seed=0)
+        vk = env.k.vehicle
+        reentry = reentry_edges(2, 2)
+        came_back, last = 0, dict(zip(vk.get_ids(), vk.edges, strict=True))
+        for _ in range(300):
+            env.step(np.zeros(4, np.float32))
+            assert vk.num_vehicles == 16 == vk.api.vehicle.getIDCount()
+            for vid, edge in zip(vk.get_ids(), vk.edges, strict=True):
+                came_back += edge == reentry.get(last.get(vid, ""))
+                last[vid] = edge
+        assert came_back >= 16  # every car went round at least once on average
+        assert sorted(vk.get_ids()) == sorted(f"human_{i}" for i in range(16))
+    finally:
+        env.close()

@@ -36,6 +36,18 @@ ADDITIONAL_PO_ENV_PARAMS: dict[str, Any] = {
 _VERTICAL = ("left", "right")
 
 
+def reentry_edges(rows: int, cols: int) -> dict[str, str]:
+    """Flow's grid: each exit edge and the entry edge its cars re-enter on (the same row or
+    column, the same heading): eastbound ``bot{i}_{cols}`` -> ``bot{i}_0``, westbound
+    ``top{i}_0`` -> ``top{i}_{cols}``, southbound ``left0_{j}`` -> ``left{rows}_{j}``,
+    northbound ``right{rows}_{j}`` -> ``right0_{j}``."""
+    out = {f"bot{i}_{cols}": f"bot{i}_0" for i in range(rows)}
+    out |= {f"top{i}_0": f"top{i}_{cols}" for i in range(rows)}
+    out |= {f"left0_{j}": f"left{rows}_{j}" for j in range(cols)}
+    out |= {f"right{rows}_{j}": f"right0_{j}" for j in range(cols)}
+    return out
+
+
 class TrafficLightGridEnv(Env):
     """Flow's ``TrafficLightGridEnv``: all lights of the grid switched by one agent.
 
@@ -46,8 +58,11 @@ class TrafficLightGridEnv(Env):
     Action: ``Box(-1, 1, (n_lights,))``, > 0 asks light ``center{i}`` to switch
     (``Discrete(2**n)`` with ``discrete``). Reward: ``-delay - (number of actions >= 0.5)``
     with Flow's ``min_delay_unscaled`` delay. Termination: collision; truncation: horizon.
-    Not done: Flow re-inserts cars that reach an exit edge at their entry (needs
-    ``k.vehicle.add``); here they leave and inflows bring new ones.
+    As Flow's, a car that reaches an exit edge is taken out and put back at the start of
+    the entry edge of the same row or column, heading the same way (same id, type and lane,
+    position 0, the lane's maximum speed), so the number of cars stays constant. (Flow's
+    ``TrafficLightGridPOEnv`` and the benchmark env do not: their cars leave and inflows
+    bring new ones.)
     """
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
@@ -78,6 +93,7 @@ class TrafficLightGridEnv(Env):
         self.num_edges = int(getattr(self.network, "num_edges", len(spec.edges)))
         self._vertical: list[list[bool]] = []
         self._acted = False
+        self._reentry = reentry_edges(self.rows, self.cols)
 
     # Flow's attribute names
     @property
@@ -148,10 +164,25 @@ class TrafficLightGridEnv(Env):
             tk.set_state(self.light_ids[i], phase_state(self._vertical[i], direction, yellow))
 
     def additional_command(self) -> None:
-        """Yellow timers run on steps without an action too."""
+        """Yellow timers run on steps without an action too; cars on exit edges re-enter."""
+        self._advance_timers()
+        self._reinsert_exiting()
+
+    def _advance_timers(self) -> None:
         if not self._acted:
             self._update_lights(np.zeros(self.num_traffic_lights, dtype=bool))
         self._acted = False
+
+    def _reinsert_exiting(self) -> None:
+        """Flow's ``_reroute_if_final_edge`` for every car: one on an exit edge goes back to
+        the entry edge of its row or column (see the class docstring)."""
+        vk, reentry = self.k.vehicle, self._reentry
+        due = [(vid, reentry[e]) for vid, e in zip(vk.get_ids(), vk.edges, strict=True)
+               if e in reentry]  # fmt: skip
+        for veh_id, entry in due:
+            type_id, lane = vk.get_type(veh_id), vk.get_lane(veh_id)
+            vk.remove(veh_id)
+            vk.add(veh_id, type_id=type_id, edge=entry, pos="0", lane=str(lane), speed="max")
 
     # ------------------------------------------------------------------ observations
     def _car_columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

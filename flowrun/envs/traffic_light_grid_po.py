@@ -128,8 +128,9 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         return -delay + standstill
 
     def additional_command(self) -> None:
-        """Yellow timers, and Flow's marking of the observed cars."""
-        super().additional_command()
+        """Yellow timers, and Flow's marking of the observed cars (no re-insertion: Flow's
+        PO env replaces its parent's command)."""
+        self._advance_timers()
         vk = self.k.vehicle
         for veh_id in self.observed_ids:
             if veh_id in vk.table:
