@@ -3,8 +3,9 @@
 Vinitsky, Parvate, Kreidieh, Wu, Hu, Bayen, "Lagrangian Control through Deep-RL:
 Applications to Bottleneck Decongestion", IEEE ITSC 2018. On Flow's
 :class:`~flowrun.networks.bottleneck.BottleneckNetwork` four lanes narrow to two and then to
-one; past about 1,600 veh/h of inflow (scaling 1) the merges break down and the outflow
-*drops* below capacity. The RL envs (:mod:`flowrun.envs.bottleneck_accel`,
+one; once the inflow passes what the merges can take (about 2,100 veh/h at scaling 1 with
+SUMO 1.28's drivers; Flow reports about 1,600) they break down and the outflow *drops* to
+about 1,460 veh/h (``bench/bottleneck.py``). The RL envs (:mod:`flowrun.envs.bottleneck_accel`,
 :mod:`flowrun.envs.bottleneck_velocity`) build on this one.
 """
 
@@ -74,6 +75,9 @@ class BottleneckEnv(Env):
     divided by ``2000 * scaling`` veh/h. Termination: collision; truncation: horizon.
     ``info`` adds ``outflow`` (veh/h over the last ``10 * sim_step`` s) to the base's keys.
     Flow's ``smoothed_num`` (cars on edge ``4`` over the last 10 steps) is kept current.
+    With ``disable_tb: false`` Flow's toll booth runs on node ``2``, with
+    ``disable_ramp_metering: false`` its ALINEA ramp meter on node ``3``
+    (:mod:`flowrun.envs.bottleneck_control`; each needs a traffic light on its node).
     """
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
