@@ -9,6 +9,8 @@ fails), which callers turn into a :class:`~flowrun.recording.damage.Loss`.
 
 from __future__ import annotations
 
+import io
+import os
 import struct
 import zlib
 from dataclasses import dataclass, field
@@ -127,8 +129,14 @@ class ChunkRef:
 
 
 def read_at(f: IO[bytes], offset: int, n: int) -> bytes:
-    f.seek(offset)
-    return f.read(n)
+    """``n`` bytes at ``offset`` (fewer at the end of the file); ``os.pread`` where there is
+    a file descriptor, so threads may share ``f``."""
+    try:
+        fd = f.fileno()
+    except (AttributeError, OSError, io.UnsupportedOperation):
+        f.seek(offset)
+        return f.read(n)
+    return os.pread(fd, n, offset)
 
 
 # -- records -------------------------------------------------------------------------------

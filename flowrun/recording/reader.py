@@ -13,6 +13,7 @@ import logging
 import math
 import os
 from collections.abc import Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import IO, Any, NamedTuple
 
@@ -196,6 +197,10 @@ class McapLog:
         """A chunk's verified records, or ``None`` (recorded in :attr:`damage`, warned once)."""
         if ref.offset in self._lost_offsets:
             return None
+        return self._settle(f, ref, self._load(f, ref))
+
+    def _load(self, f: IO[bytes], ref: mcap_records.ChunkRef) -> _Chunk | Exception:
+        """Read, decompress, check and split a chunk (no state changes: runs in a thread)."""
         try:
             records = mcap_records.chunk_records(f, ref, self.file_bytes)
             spans = mcap_records.split_records(records)
@@ -207,15 +212,23 @@ class McapLog:
             ]
             return _Chunk(records, spans, schemas, channels)
         except (mcap_records.BadRecord, OSError, MemoryError) as err:
-            self._lost_offsets.add(ref.offset)
-            vehicles = self._channel_id(schema.VEHICLES_TOPIC)
-            frames = None
-            if vehicles is not None:
-                frames = mcap_records.count_messages(f, ref, vehicles, self.file_bytes)
-            loss = Loss("chunk", ref.offset, str(err), ref.start_ns / 1e9, ref.end_ns / 1e9, frames)
-            if self.damage.add(loss):
-                log.warning("%s: %s; the other chunks are read", self.path, loss.describe())
-            return None
+            return err
+
+    def _settle(
+        self, f: IO[bytes], ref: mcap_records.ChunkRef, loaded: _Chunk | Exception
+    ) -> _Chunk | None:
+        """The loaded chunk, or ``None`` after recording why it is lost."""
+        if isinstance(loaded, _Chunk):
+            return loaded
+        self._lost_offsets.add(ref.offset)
+        vehicles = self._channel_id(schema.VEHICLES_TOPIC)
+        frames = None
+        if vehicles is not None:
+            frames = mcap_records.count_messages(f, ref, vehicles, self.file_bytes)
+        loss = Loss("chunk", ref.offset, str(loaded), ref.start_ns / 1e9, ref.end_ns / 1e9, frames)
+        if self.damage.add(loss):
+            log.warning("%s: %s; the other chunks are read", self.path, loss.describe())
+        return None
 
     def _channel_id(self, topic: str) -> int | None:
         for cid, channel in self._channels.items():
@@ -277,14 +290,27 @@ class McapLog:
             return
         wanted = None if topics is None else set(topics)
         unpack, head = mcap_records.message_fields, mcap_records.MESSAGE_HEAD
-        with open(self.path, "rb") as f:
-            for ref in self._st.chunks:
-                if ref.times_trusted and (
+        refs = [
+            ref
+            for ref in self._st.chunks
+            if ref.offset not in self._lost_offsets
+            and not (
+                ref.times_trusted
+                and (
                     (start_ns is not None and ref.end_ns < start_ns)
                     or (end_ns is not None and ref.start_ns > end_ns)
-                ):
-                    continue
-                chunk = self._chunk(f, ref)
+                )
+            )
+        ]
+        # One worker reads, decompresses and CRC-checks the next chunk while this one's
+        # messages are used (zstd and zlib release the GIL); nothing leaves unchecked.
+        with open(self.path, "rb") as f, ThreadPoolExecutor(1) as pool:
+            pending = pool.submit(self._load, f, refs[0]) if refs else None
+            for i, ref in enumerate(refs):
+                assert pending is not None
+                loaded = pending.result()
+                pending = pool.submit(self._load, f, refs[i + 1]) if i + 1 < len(refs) else None
+                chunk = self._settle(f, ref, loaded)
                 if chunk is None:
                     continue
                 for sch in chunk.schemas:
