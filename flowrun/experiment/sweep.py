@@ -38,6 +38,16 @@ from flowrun.suggest import unknown_name
 #: Per-run metrics a sweep can plot (``metrics.json`` run rows), besides the signal metrics.
 METRICS = (*tuple(f.name for f in fields(RunMetrics) if f.name != "run"), "outflow")
 SIGNAL_METRICS = ("mean_delay", "mean_travel_time", "throughput", "mean_queue", "waiting_at_end")
+#: Units of the metrics, for the plot's axis.
+UNITS = {
+    **{m: "m/s" for m in METRICS if "speed" in m},
+    "outflow": "veh/h",
+    "throughput": "veh/h",
+    "duration": "s",
+    "mean_delay": "s",
+    "mean_travel_time": "s",
+    "mean_queue": "veh",
+}
 _SAFE = re.compile(r"[^A-Za-z0-9._=\-\[\]]")
 
 
@@ -285,11 +295,12 @@ def _exact(value: Any) -> str:
 
 
 def _cell(value: Any) -> str:
+    """A Markdown cell: 6 significant digits, ``|`` escaped."""
     if value is None:
         return ""
     if isinstance(value, float):
         return f"{value:.6g}" if math.isfinite(value) else ""
-    return str(value)
+    return str(value).replace("|", "\\|")
 
 
 def metric_series(
@@ -334,7 +345,7 @@ def plot_metric(plan: SweepPlan, rows: list[dict[str, Any]], metric: str) -> Pat
             x = list(xs)
         ax.errorbar(x, means, yerr=stds, marker="o", capsize=3, label=name)
     ax.set_xlabel(plan.axes[0].key)
-    ax.set_ylabel(metric)
+    ax.set_ylabel(f"{metric} ({UNITS[metric]})" if metric in UNITS else metric)
     ax.set_title(f"{metric} vs {plan.axes[0].key} ({len(plan.seeds)} seed(s) per point)")
     ax.grid(alpha=0.3)
     if len(plan.axes) > 1:
