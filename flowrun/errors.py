@@ -34,8 +34,25 @@ class ConfigError(FlowrunError):
         return f"{where}: {self.message}" if where else self.message
 
 
-class SimulationError(FlowrunError):
-    """SUMO refused something or failed (netconvert output, start failure, lost vehicles)."""
+class FatalFlowError(FlowrunError):
+    """An error after which the simulation cannot continue (Flow's ``FatalFlowError``, also
+    importable from ``flowrun.utils.exceptions``).
+
+    Args:
+        msg: what went wrong.
+    """
+
+    def __init__(self, msg: str) -> None:
+        self.message = msg
+        super().__init__(msg)
+
+
+class SimulationError(FatalFlowError):
+    """SUMO refused something or failed (netconvert output, start failure, lost vehicles).
+
+    A :class:`FatalFlowError`, as Flow raises for the same failures (e.g. not all vehicles
+    could be inserted at the start).
+    """
 
 
 class RecordingError(FlowrunError):

@@ -153,6 +153,10 @@ class Network:
     #: the kind of each parameter (see :func:`flowrun.networks.checks.check_values`),
     #: checked by :meth:`resolve_params`
     PARAM_KINDS: ClassVar[dict[str, str]] = {}
+    #: keys Flow's own examples pass to this network although it does not use them
+    #: (e.g. a ring's ``resolution`` given to the highway): accepted and left unused, as in
+    #: Flow, instead of being refused as unknown
+    UNUSED_FLOW_PARAMS: ClassVar[frozenset[str]] = frozenset()
     network_type: ClassVar[str] = ""
 
     def __init__(
@@ -179,6 +183,8 @@ class Network:
         if not params:  # a user's network that declares none takes what it is given (Flow)
             return dict(given)
         for key, value in given.items():
+            if key in cls.UNUSED_FLOW_PARAMS and key not in params:
+                continue
             if key not in params:
                 raise ConfigError(
                     f"unknown parameter of network '{cls.network_type}'"

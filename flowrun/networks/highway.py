@@ -12,6 +12,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from flowrun.errors import ConfigError
 from flowrun.networks.base import Edge, Network, NetworkSpec, Node
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
@@ -92,7 +93,38 @@ class HighwayNetwork(Network):
 
     ADDITIONAL_NET_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_NET_PARAMS
     PARAM_KINDS: ClassVar[dict[str, str]] = KINDS
+    #: Flow's test set-ups give the highway a ring's ``resolution``; Flow ignores it
+    UNUSED_FLOW_PARAMS: ClassVar[frozenset[str]] = frozenset({"resolution"})
     network_type: ClassVar[str] = "highway"
+
+    def gen_custom_start_pos(
+        self, net_params: Any, initial_config: Any, num_vehicles: int
+    ) -> tuple[list[tuple[str, float]], list[int]]:
+        """Flow's ``spacing="custom"`` on the highway: the positions and lanes the user lists
+        in ``initial_config.additional_params`` (``start_positions``: ``[(edge, pos)]``,
+        ``start_lanes``: ``[lane]``), as Flow's highway reads them.
+
+        Raises:
+            ConfigError: either list is missing or their lengths differ.
+        """
+        extra = dict(getattr(initial_config, "additional_params", None) or {})
+        missing = [k for k in ("start_positions", "start_lanes") if k not in extra]
+        if missing:
+            raise ConfigError(
+                "initial.spacing 'custom' on the highway reads "
+                + " and ".join(f"initial.additional_params.{k}" for k in missing)
+                + " ([(edge, position), ...] and [lane, ...]), which are not given",
+                path="initial.additional_params",
+            )
+        positions = [(str(e), float(x)) for e, x in extra["start_positions"]]
+        lanes = [int(x) for x in extra["start_lanes"]]
+        if len(positions) != len(lanes):
+            raise ConfigError(
+                f"initial.additional_params: {len(positions)} start_positions but "
+                f"{len(lanes)} start_lanes; give one lane per position",
+                path="initial.additional_params",
+            )
+        return positions, lanes
 
     def build_spec(self) -> NetworkSpec:
         """The highway's nodes, edges and routes."""
