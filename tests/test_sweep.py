@@ -24,6 +24,7 @@ from flowrun.experiment.rundir import is_complete, read_status
 from flowrun.experiment.sweep import (
     check_metric,
     finished_folder,
+    locked,
     parse_grid,
     plan_sweep,
     split_values,
@@ -124,6 +125,17 @@ def test_a_bad_sweep_is_one_line_before_anything_runs(
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0], lines
     assert not out.exists()
+
+
+def test_the_same_sweep_cannot_run_twice_at_once(tmp_path: Path) -> None:
+    args = ["sweep", str(SUGIYAMA), "--grid", "network.length=230", "--out", str(tmp_path)]
+    plan = plan_sweep(load_config(SUGIYAMA), parse_grid(["network.length=230"]), 1, tmp_path,
+                      ["--runs", "1"])  # fmt: skip
+    with locked(plan):  # as another sweep process would
+        result = CliRunner().invoke(app, args)
+    assert result.exit_code == 1
+    assert f"already running (pid {os.getpid()})" in result.stderr
+    assert [p.name for p in plan.folder.iterdir()] == [".lock"]  # no point started
 
 
 # --- real sweeps -------------------------------------------------------------------------------

@@ -240,11 +240,27 @@ def sweep(
     plan = sw.plan_sweep(cfg, axes, seeds, out, run_args)
     _check_points(config, sets, plan, steps)
     check_out_dir(out)
-    todo = [p for p in plan.points if sw.finished_folder(plan, p) is None]
     try:
-        sw.write_plan(plan, sys.argv)
+        with sw.locked(plan):
+            sw.write_plan(plan, sys.argv)
+            _run_sweep(config, sets, plan, out, run_args, jobs, metric)
     except OSError as err:
         raise FlowrunError(f"cannot write sweep folder {plan.folder}: {err.strerror}") from None
+
+
+def _run_sweep(
+    config: Path,
+    sets: list[str],
+    plan: SweepPlan,
+    out: Path,
+    run_args: list[str],
+    jobs: int | None,
+    metric: str,
+) -> None:
+    """Run the points not done yet, then write and print the results."""
+    from flowrun.experiment import sweep as sw
+
+    todo = [p for p in plan.points if sw.finished_folder(plan, p) is None]
     skipped = len(plan.points) - len(todo)
     if skipped:
         console.print(f"{skipped} of {len(plan.points)} point(s) already done: skipped")

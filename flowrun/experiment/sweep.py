@@ -16,12 +16,15 @@ standard deviation over seeds, one line per combination of the other keys).
 from __future__ import annotations
 
 import csv
+import fcntl
 import hashlib
 import itertools
 import json
 import math
+import os
 import re
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
@@ -30,7 +33,7 @@ import numpy as np
 
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
-from flowrun.errors import ConfigError
+from flowrun.errors import ConfigError, FlowrunError
 from flowrun.experiment.metrics import RunMetrics
 from flowrun.experiment.rundir import is_complete, write_json
 from flowrun.suggest import unknown_name
@@ -221,6 +224,30 @@ def point_folders(plan: SweepPlan, point: SweepPoint) -> list[Path]:
 def finished_folder(plan: SweepPlan, point: SweepPoint) -> Path | None:
     """The folder of a completed run of ``point``, if any (never a cut or interrupted one)."""
     return next((f for f in point_folders(plan, point) if is_complete(f)), None)
+
+
+@contextmanager
+def locked(plan: SweepPlan) -> Iterator[None]:
+    """Hold the sweep folder for this process (``.lock``, released even if it is killed).
+
+    Raises:
+        FlowrunError: another process is running the same sweep.
+    """
+    plan.folder.mkdir(parents=True, exist_ok=True)
+    with (plan.folder / ".lock").open("a+") as f:
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            f.seek(0)
+            raise FlowrunError(
+                f"this sweep is already running (pid {f.read().strip() or '?'}) in "
+                f"{plan.folder}; wait for it, or stop it and run the command again"
+            ) from None
+        f.seek(0)
+        f.truncate()
+        f.write(f"{os.getpid()}\n")
+        f.flush()
+        yield
 
 
 def write_plan(plan: SweepPlan, argv: Sequence[str]) -> None:
