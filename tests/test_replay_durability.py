@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import re
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -112,7 +113,9 @@ def test_repair_into_a_read_only_folder(sumo_log: Path, tmp_path: Path) -> None:
         folder.chmod(0o755)
 
 
-def test_damaged_copies_warn_or_fail_cleanly(sumo_log: Path, tmp_path: Path) -> None:
+def test_damaged_copies_warn_or_fail_cleanly(
+    sumo_log: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     data = sumo_log.read_bytes()
     intact = _replay(sumo_log)
     rng = np.random.default_rng(10)
@@ -138,4 +141,6 @@ def test_damaged_copies_warn_or_fail_cleanly(sumo_log: Path, tmp_path: Path) -> 
             assert result.exit_code == 0 and not _read_all(path).salvaged
             assert result.stdout.replace(path.name, sumo_log.name) == intact.stdout
             kinds.append("intact")
+    with capsys.disabled():
+        print(f"\nCLI on damaged SUMO logs ({len(kinds)}): {dict(Counter(kinds))}")
     assert kinds.count("salvaged") >= 10, kinds
