@@ -102,7 +102,8 @@ def make_callbacks(
         """Saves a checkpoint each time another ``checkpoint_freq`` steps are done."""
 
         def _init_callback(self) -> None:
-            self.next_at = _next_multiple(int(self.num_timesteps), checkpoint_freq)
+            # self.num_timesteps is only set by the first step: a resumed run starts above 0
+            self.next_at = _next_multiple(int(self.model.num_timesteps), checkpoint_freq)
 
         def _on_step(self) -> bool:
             if checkpoint_freq > 0 and self.num_timesteps >= self.next_at:

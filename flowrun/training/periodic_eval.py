@@ -253,7 +253,8 @@ def make_periodic_eval_callback(
         """Evaluates at each multiple of ``eval_freq`` steps; keeps the best model."""
 
         def _init_callback(self) -> None:
-            self.next_at = (int(self.num_timesteps) // eval_freq + 1) * eval_freq
+            done = int(self.model.num_timesteps)  # self.num_timesteps is set by the first step
+            self.next_at = (done // eval_freq + 1) * eval_freq
 
         def _on_step(self) -> bool:
             if self.num_timesteps < self.next_at:

@@ -37,6 +37,8 @@ def resume_state(run_dir: Path) -> dict[str, Any]:
         state = read_checkpoint_state(run_dir / "checkpoints")
     except ValueError as err:
         raise TrainingError(f"{run_dir}/checkpoints/state.json is damaged ({err})") from None
+    if state is None and _never_trained(run_dir):
+        return {"timesteps": 0, "model": None, "vecnormalize": None}  # start again in place
     if state is None:
         raise TrainingError(
             f"{run_dir} has no checkpoint to resume from (no checkpoints/state.json); "
@@ -47,6 +49,14 @@ def resume_state(run_dir: Path) -> dict[str, Any]:
             f"{run_dir}/checkpoints/state.json names {state.get('model')}, which is missing"
         )
     return state
+
+
+def _never_trained(run_dir: Path) -> bool:
+    """Whether the run stopped before its first step (its ``metrics.json`` says 0 steps)."""
+    from flowrun.training.runstate import read_metrics
+
+    metrics = read_metrics(run_dir)
+    return metrics is not None and metrics.get("timesteps") == 0
 
 
 def note_resume(

@@ -13,6 +13,7 @@ from __future__ import annotations
 import logging
 import multiprocessing.forkserver
 import signal
+import threading
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -228,20 +229,24 @@ def _save_interrupted(model: BaseAlgorithm | None, run_dir: Path, tc: TrainConfi
 
 
 def _start_forkserver_shielded() -> None:
-    """Start multiprocessing's fork server with SIGINT blocked.
+    """Start multiprocessing's fork server with SIGINT ignored.
 
-    The env subprocesses are forked from it and inherit the blocked signal, so Ctrl-C in a
-    terminal (sent to the whole process group) reaches only this process, which stops at a
-    step boundary and closes the envs itself. A Ctrl-C meanwhile waits and is delivered here
-    afterwards. SIGTERM is left alone (``multiprocessing`` ends stray children with it); when
-    it reaches the envs too, training stops as interrupted all the same. No-op when the fork
-    server already runs.
+    The env subprocesses are forked from it and inherit that, so Ctrl-C in a terminal (sent
+    to the whole process group) reaches only this process, which stops at a step boundary and
+    closes the envs itself. SIGINT stays blocked here meanwhile, so a Ctrl-C in that moment is
+    delivered afterwards, not lost. SIGTERM is left alone (``multiprocessing`` ends stray
+    children with it); when it reaches the envs too, training stops as interrupted all the
+    same. No-op when the fork server already runs or outside the main thread.
     """
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    if threading.current_thread() is not threading.main_thread():
+        return
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         multiprocessing.forkserver.ensure_running()
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        signal.signal(signal.SIGINT, handler)
+        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
 
 
 def _training_env(
@@ -297,7 +302,7 @@ def _model(
     hyper = build_hyperparams(tc.algorithm, tc.hyperparams, action_dim)
     torch = require("torch")
     torch.set_num_threads(1)  # the envs need the other core(s)
-    if state is None:
+    if state is None or not state.get("model"):
         return cls(
             tc.policy, venv, policy_kwargs=dict(tc.policy_kwargs) or None, seed=seed,
             tensorboard_log=str(run_dir / "tensorboard"), verbose=0, device="cpu", **hyper,
