@@ -110,6 +110,7 @@ def test_outflow_rises_with_inflow_then_drops_past_capacity() -> None:
     assert low == pytest.approx(1000, rel=0.05)  # below capacity all cars pass
     assert near == pytest.approx(1800, rel=0.05)
     assert over < near - 200  # the merges break down: less passes than at 1,800 veh/h
+    assert outflow(3000) == over  # same seed, same run
 
 
 def test_positions_grow_along_the_road_through_the_zippers() -> None:
