@@ -17,30 +17,39 @@ the run measured, so two runs with the same seed write the same ``metrics.json``
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 import platform
 import shlex
 import shutil
-import signal
-import socket
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
-from dataclasses import dataclass
 from datetime import UTC, datetime
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Any
 
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, FlowrunError
+from flowrun.experiment.runstatus import (
+    COMPLETE,
+    CUT,
+    FAILED,
+    INTERRUPTED,
+    RUNNING,
+    STATUS_FILE,
+    Interrupted,
+    RunStatus,
+    exit_code_of,
+    is_complete,
+    mark_done,
+    mark_running,
+    read_status,
+)
 from flowrun.experiment.safeio import (
     WRITE_ERRORS,
     describe_os_error,
-    json_text,
     write_json,
 )
 
@@ -80,65 +89,12 @@ PACKAGES = (
     "torch",
 )
 
-STATUS_FILE = "status.json"
-RUNNING, COMPLETE, INTERRUPTED, FAILED, CUT = "running", "complete", "interrupted", "failed", "cut"
 #: Files every run folder has from the start: a failed run with nothing else is removed.
 BOOKKEEPING = frozenset(
     {"config.yaml", "command.txt", "versions.json", STATUS_FILE, "metrics.json"}
 )
 #: Scratch folders (SUMO's generated network files) that are not results either.
 SCRATCH = frozenset({"sumo"})
-
-
-class Interrupted(KeyboardInterrupt):
-    """Ctrl-C or SIGTERM, stopping a run: a ``KeyboardInterrupt`` that knows its signal.
-
-    Args:
-        signum: the signal received (``SIGINT`` for a plain Ctrl-C).
-    """
-
-    def __init__(self, signum: int = signal.SIGINT) -> None:
-        super().__init__(signal.Signals(signum).name)
-        self.signum = int(signum)
-
-    @property
-    def exit_code(self) -> int:
-        """The shell's code for death by this signal: 130 for SIGINT, 143 for SIGTERM."""
-        return 128 + self.signum
-
-
-def exit_code_of(err: BaseException) -> int:
-    """Exit code for an interruption: 128 + signal (130 when the signal is unknown)."""
-    return err.exit_code if isinstance(err, Interrupted) else 128 + signal.SIGINT
-
-
-@dataclass(frozen=True)
-class RunStatus:
-    """What ``status.json`` says, checked against the processes alive now.
-
-    Attributes:
-        state: ``running``, ``complete``, ``interrupted``, ``failed``, ``cut`` (said running,
-            but its process is gone) or ``unknown`` (no readable ``status.json``).
-        pid: process that ran it.
-        host: machine that ran it.
-        started: UTC start time (ISO 8601).
-        ended: UTC end time, when it ended.
-        error: the one-line error of a failed run.
-        exit_code: the command's exit code (130/143 when interrupted), when it ended.
-    """
-
-    state: str
-    pid: int | None = None
-    host: str | None = None
-    started: str | None = None
-    ended: str | None = None
-    error: str | None = None
-    exit_code: int | None = None
-
-    @property
-    def finished(self) -> bool:
-        """Whether the run completed (its results are whole)."""
-        return self.state == COMPLETE
 
 
 def versions() -> dict[str, str]:
@@ -256,109 +212,6 @@ def start_run(
         shutil.rmtree(run_dir, ignore_errors=True)
         raise FlowrunError(f"cannot write run folder {run_dir}: {describe_os_error(err)}") from None
     return run_dir
-
-
-def _now() -> str:
-    return datetime.now(UTC).isoformat(timespec="seconds")
-
-
-def _process_start(pid: int) -> str | None:
-    """The kernel's start time of ``pid`` (Linux ``/proc``): tells a reused pid apart."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return None
-    return stat.rsplit(")", 1)[-1].split()[19]  # field 22, counted after "pid (comm)"
-
-
-def mark_running(run_dir: Path) -> None:
-    """Write ``status.json``: ``running``, this process's pid, host and start time."""
-    pid = os.getpid()
-    write_json(
-        run_dir / STATUS_FILE,
-        {
-            "status": RUNNING,
-            "pid": pid,
-            "pid_start": _process_start(pid),
-            "host": socket.gethostname(),
-            "started": _now(),
-        },
-        reserve=STATUS_RESERVE,
-    )
-
-
-def mark_done(
-    run_dir: Path, state: str, *, error: str | None = None, exit_code: int | None = None
-) -> None:
-    """Replace ``running`` by how the run ended (``complete``, ``interrupted``, ``failed``)."""
-    path = run_dir / STATUS_FILE
-    data: dict[str, Any] = {}
-    with suppress(OSError, ValueError):
-        data = dict(json.loads(path.read_text()))
-    data.update({"status": state, "ended": _now()})
-    if error is not None:
-        data["error"] = error
-    if exit_code is not None:
-        data["exit_code"] = exit_code
-    try:
-        write_json(path, data)
-    except OSError:  # disk full: overwrite the reserved bytes of the running status instead
-        text = json_text(data)
-        if len(text.encode()) > STATUS_RESERVE:
-            data["error"] = str(data.get("error", ""))[:500]
-            text = json_text(data)
-        raw = text.encode()
-        with path.open("r+b") as f:
-            size = f.seek(0, os.SEEK_END)
-            f.seek(0)
-            f.write(raw.ljust(size))  # same size or less: no new blocks needed
-            f.truncate()
-            f.flush()
-            os.fsync(f.fileno())
-
-
-def _alive(pid: int, start: str | None) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True  # someone else's process: it exists
-    now = _process_start(pid)
-    return start is None or now is None or now == start
-
-
-def read_status(run_dir: Path) -> RunStatus:
-    """How the run in ``run_dir`` ended, or ``cut`` if it says running but its process died."""
-    try:
-        data = json.loads((run_dir / STATUS_FILE).read_text())
-        state = str(data["status"])
-    except (OSError, ValueError, KeyError, TypeError):
-        return RunStatus("unknown")
-    pid = data.get("pid")
-    host = data.get("host")
-    here = isinstance(pid, int) and host == socket.gethostname()
-    if state == RUNNING and here and not _alive(int(pid), data.get("pid_start")):
-        state = CUT
-    return RunStatus(
-        state,
-        pid=pid if isinstance(pid, int) else None,
-        host=host,
-        started=data.get("started"),
-        ended=data.get("ended"),
-        error=data.get("error"),
-        exit_code=data.get("exit_code"),
-    )
-
-
-def is_complete(run_dir: Path) -> bool:
-    """Whether ``run_dir`` holds a run that completed (not running, cut, interrupted, failed)."""
-    return read_status(run_dir).finished
-
-
-#: ``status.json`` is written this big at the start (padded with spaces), so that its final
-#: version can overwrite it in place when the disk is full.
-STATUS_RESERVE = 2048
 
 
 def _has_results(run_dir: Path) -> bool:
