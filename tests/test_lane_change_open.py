@@ -104,3 +104,21 @@ def test_rl_lane_change_is_held_for_lane_change_duration_steps() -> None:
         assert [[a[v] for v in moved] for a in asked] == [[0.0] * len(moved)] * 5 + [
             [-1.0] * len(moved)
         ]
+
+
+def test_lane_changes_get_the_same_step_whether_asked_every_step_or_not() -> None:
+    def stamps(ask: bool) -> dict[str, int]:
+        with highway("env.horizon=200") as env:
+            env.reset(seed=0)
+            vk = env.k.vehicle
+            vk.lane_change_log()
+            for step in range(1, 201):
+                env.k.step()
+                assert env.k.simulation.step_count == step
+                if ask:
+                    vk.get_lane_changes()
+            return dict(vk.lane_change_log().last)
+
+    asked = stamps(True)
+    assert asked and all(1 <= s <= 200 for s in asked.values())
+    assert stamps(False) == asked

@@ -123,6 +123,8 @@ class VehicleCommands:
     _lanes: LaneTable | None
     _edge_by_id: dict[str, Edge]
     _multi_lane: bool
+    #: simulation steps this kernel has sent commands for (one per step since it attached)
+    _steps_sent: int = 0
     _lane_key: np.ndarray
 
     @property
@@ -179,10 +181,8 @@ class VehicleCommands:
                 edge = self._lanes.edge_index[self._lane_key]
             else:  # a closed ring: lane numbers never change between edges
                 edge = np.zeros(lanes.size, dtype=np.int64)
-            # SUMO starts at 0 s and flowrun's insertion takes one step: the episode's
-            # step 0 is SUMO's time dt
-            step = round(float(self._fast.sim_time()) / self.dt) - 1
-            log.observe(lanes, edge, self.table.ids, self.table.version, step)
+            # the state of step n (since the kernel attached) follows n sent commands
+            log.observe(lanes, edge, self.table.ids, self.table.version, self._steps_sent)
         return log
 
     def get_last_lc(self, veh_id: str, error: float = ERROR) -> float:
@@ -246,9 +246,10 @@ class VehicleCommands:
         return True
 
     def send_commands(self) -> None:
-        """Send the buffered commands to SUMO and clear them."""
+        """Send the buffered commands to SUMO and clear them (once per simulation step)."""
         if self._multi_lane and "_lc_log" in self.__dict__:  # lanes before this step
             self.lane_change_log()
+        self._steps_sent += 1
         v = self.api.vehicle
         ids = self.table.ids
         cmd = self.accel_cmd
