@@ -24,6 +24,8 @@ def config(tmp_path: Path) -> Path:
     path = tmp_path / "ring.yaml"
     path.write_text(
         "name: ring\n"
+        "env: {additional_params: {max_accel: 1, max_decel: 1, target_velocity: 10,"
+        " sort_vehicles: false}}\n"
         "network: {type: ring, length: 230}\n"
         "vehicles:\n"
         "  - {id: idm, count: 22, acceleration_controller: IDM}\n"

@@ -33,6 +33,8 @@ from flowrun.config.yamlio import KeyPath, Locations
 from flowrun.errors import ConfigError
 from flowrun.suggest import did_you_mean
 
+#: Largest number in a free-form parameter mapping (network or controller parameters).
+MAX_PARAMETER = 1e9
 # ``network:`` keys that are not the network type's ``additional_params``.
 NETWORK_KEYS = ("type", "inflows", "template", "osm_path")
 
@@ -191,6 +193,8 @@ class Converter:
         if not isinstance(name, str) or not name:
             raise self.loc.error(f"expected a controller name, got {show(name)}", (*path, "type"))
         params = {k: copy.deepcopy(v) for k, v in data.items() if k != "type"}
+        for key, value in params.items():
+            self._sane_numbers(value, (*path, key))
         return ControllerSpec(name, params)
 
     def vehicles(self, data: Any, path: KeyPath) -> VehicleParams:
@@ -256,6 +260,7 @@ class Converter:
                 raise self.loc.error(
                     f"a network parameter name must be a string, got {key!r}", path
                 )
+            self._sane_numbers(raw, (*path, key))
             if key in NETWORK_NUMBERS:
                 tp, check = NETWORK_NUMBERS[key]
                 self._scalar(tp, raw, (*path, key))
@@ -270,6 +275,23 @@ class Converter:
             osm_path=self.value(hints["osm_path"], data.get("osm_path"), (*path, "osm_path")),
         )
         return NetworkConfig(type=kind, net_params=net)
+
+    def _sane_numbers(self, data: Any, path: KeyPath) -> None:
+        """Every number in a free-form parameter (nested too) is finite and at most
+        :data:`MAX_PARAMETER` in size: no network or controller wants NaN, inf or 1e308."""
+        if isinstance(data, float | int) and not isinstance(data, bool):
+            if not abs(data) <= MAX_PARAMETER:  # NaN fails the comparison too
+                raise self.loc.error(
+                    f"expected a finite number between -{MAX_PARAMETER:g} and "
+                    f"{MAX_PARAMETER:g}, got {data!r}",
+                    path,
+                )
+        elif isinstance(data, Mapping):
+            for key, value in data.items():
+                self._sane_numbers(value, (*path, key))
+        elif isinstance(data, list):
+            for i, value in enumerate(data):
+                self._sane_numbers(value, (*path, i))
 
     def traffic_lights(self, data: Any, path: KeyPath) -> TrafficLightsConfig:
         """``traffic_lights:`` -> :class:`TrafficLightsConfig` (see ``config/tls_yaml.py``)."""

@@ -14,6 +14,7 @@ run.
 from __future__ import annotations
 
 import importlib.util
+import inspect
 import os
 from collections.abc import Sequence
 from typing import Any
@@ -25,6 +26,7 @@ from flowrun.config.model import ExperimentConfig
 from flowrun.config.params import is_rl
 from flowrun.config.yamlio import Locations
 from flowrun.errors import ConfigError, TrainingError
+from flowrun.suggest import did_you_mean
 
 #: Built-in environments whose actions drive RL vehicles (training needs at least one).
 RL_VEHICLE_ENVS = ("AccelEnv", "LaneChangeAccelEnv", "WaveAttenuationEnv",
@@ -112,3 +114,36 @@ def _check_hyperparam_names(cfg: ExperimentConfig, loc: Locations) -> None:
         raise _relocated(err, loc) from None
     except TrainingError:
         return  # the algorithm's package (sb3-contrib) is missing: train says how to install it
+    _check_policy(cfg, loc)
+
+
+def _check_policy(cfg: ExperimentConfig, loc: Locations) -> None:
+    """``train.policy`` is one of the algorithm's policy names; ``policy_kwargs`` are
+    arguments of that policy class (SB3 would fail with a TypeError after the envs started)."""
+    train = cfg.train
+    find = optional("flowrun.training.algorithms", "algorithm_class")
+    if train is None or find is None:
+        return
+    try:
+        algo = find(train.algorithm)
+    except (ConfigError, TrainingError):
+        return
+    policies: dict[str, Any] = dict(getattr(algo, "policy_aliases", {}) or {})
+    if train.policy not in policies:
+        raise loc.error(
+            f"{train.algorithm} has no policy '{train.policy}'"
+            f"{did_you_mean(train.policy, policies)}; expected one of: {', '.join(policies)}",
+            ("train", "policy"),
+        )
+    params = inspect.signature(policies[train.policy].__init__).parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return
+    fixed = ("self", "observation_space", "action_space", "lr_schedule")
+    accepted = [name for name in params if name not in fixed]
+    for key in train.policy_kwargs:
+        if key not in accepted:
+            raise loc.error(
+                f"{train.policy} takes no argument '{key}'{did_you_mean(str(key), accepted)}; "
+                f"expected one of: {', '.join(accepted)}",
+                ("train", "policy_kwargs", key),
+            )
