@@ -50,6 +50,7 @@ def test_grid_values_split_on_commas_outside_brackets() -> None:
         (["network.length=230,,260"], "empty value"),
         (["network.length=230,230"], "listed twice"),
         (["network.length=230", "network.length=260"], "given twice"),
+        (["sim.seed=1,2"], "use --seeds N"),
     ],
 )
 def test_a_bad_grid_is_refused(items: list[str], needle: str) -> None:
@@ -217,6 +218,7 @@ def test_an_interrupted_sweep_keeps_finished_points_and_the_same_command_finishe
     assert "vehicles[0].count=22__seed=0" not in states  # never started
     rows = read_csv(folder / "results.csv")
     assert rows[0]["status"] == "complete" and rows[2]["status"] == "missing"
+    assert rows[1]["status"] == states["vehicles[0].count=18__seed=0"]
     done = subprocess.run(cmd, capture_output=True, text=True, check=False, timeout=300)
     assert done.returncode == 0, done.stderr
     rows = read_csv(folder / "results.csv")

@@ -35,7 +35,7 @@ from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, FlowrunError
 from flowrun.experiment.metrics import RunMetrics
-from flowrun.experiment.rundir import is_complete, write_json
+from flowrun.experiment.rundir import is_complete, read_status, write_json
 from flowrun.suggest import unknown_name
 
 #: Per-run metrics a sweep can plot (``metrics.json`` run rows), besides the signal metrics.
@@ -146,6 +146,11 @@ def parse_grid(items: Sequence[str]) -> tuple[GridAxis, ...]:
             raise ConfigError(f"--grid {key}: empty value in '{raw}'")
         if len(set(values)) != len(values):
             raise ConfigError(f"--grid {key}: a value is listed twice in '{raw}'")
+        if key in {"sim.seed", "seed"}:
+            raise ConfigError(
+                f"--grid {key}: seeds are not a grid key; use --seeds N (and --seed S for the "
+                "first seed)"
+            )
         if any(axis.key == key for axis in axes):
             raise ConfigError(f"--grid {key} is given twice; list all its values in one --grid")
         axes.append(GridAxis(key, tuple(values)))
@@ -265,14 +270,19 @@ def write_plan(plan: SweepPlan, argv: Sequence[str]) -> None:
 
 
 def collect(plan: SweepPlan) -> list[dict[str, Any]]:
-    """One row per point: its values, seed, status and, if it completed, the mean over its
-    runs of every number in its ``metrics.json`` run rows."""
+    """One row per point: its values, seed, status (``complete``; else how its last attempt
+    ended, or ``missing``) and, if it completed, the mean over its runs of every number in
+    its ``metrics.json`` run rows."""
     rows = []
     for point in plan.points:
         row: dict[str, Any] = {k: v for k, v in point.values}
         row["seed"] = point.seed
         folder = finished_folder(plan, point)
-        row["status"] = "complete" if folder is not None else "missing"
+        tried = point_folders(plan, point)
+        if folder is not None:
+            row["status"] = "complete"
+        else:  # how the last attempt ended: interrupted, failed, cut, running; or never run
+            row["status"] = read_status(tried[-1]).state if tried else "missing"
         if folder is not None:
             row["run_dir"] = folder.name
             data = json.loads((folder / "metrics.json").read_text())
