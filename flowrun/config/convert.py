@@ -159,16 +159,16 @@ class Converter:
                     f"'{key}' and '{given_as[name]}' are the same setting; give only one", at
                 )
             value = self.value(hints[name], raw, at)
-            if isinstance(value, float) and not math.isfinite(value):
-                if math.isnan(value):
-                    raise self.loc.error("must be a number, got .nan", at)
-                if (cls, name) not in INFINITE_OK:
-                    raise self.loc.error(f"must be finite, got {raw!r}", at)
             check = FIELD_CHECKS.get((cls, name))
             # Checked as written (``-3``, not the converted ``-3.0``) so messages quote the file.
             problem = check(raw if type(raw) in (int, float) else value) if check else None
             if problem:
                 raise self.loc.error(problem, at)
+            if isinstance(value, float) and not math.isfinite(value):
+                if math.isnan(value):
+                    raise self.loc.error("must be a number, got .nan", at)
+                if (cls, name) not in INFINITE_OK:
+                    raise self.loc.error(f"must be finite, got {raw!r}", at)
             kwargs[name] = value
             given_as[name] = key
         for name, f in fields.items():
@@ -260,13 +260,13 @@ class Converter:
                 raise self.loc.error(
                     f"a network parameter name must be a string, got {key!r}", path
                 )
-            self._sane_numbers(raw, (*path, key))
             if key in NETWORK_NUMBERS:
                 tp, check = NETWORK_NUMBERS[key]
                 self._scalar(tp, raw, (*path, key))
                 problem = check(raw)
                 if problem:
                     raise self.loc.error(problem, (*path, key))
+            self._sane_numbers(raw, (*path, key))
         hints = _hints(NetParams)
         net = NetParams(
             additional_params=copy.deepcopy(extra),
