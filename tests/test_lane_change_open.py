@@ -36,9 +36,10 @@ def human_lane_changes(seed: int, *overrides: str, steps: int = 200) -> list[lis
         keep = np.zeros(env.action_space.shape, dtype=np.float32)
         out = []
         for _ in range(steps):
-            env.step(keep)
+            info = env.step(keep)[4]
             out.append(env.k.vehicle.get_lane_changes())
         assert env.k.vehicle.num_lane_changes == sum(len(c) for c in out)
+        assert info["lane_changes"] == sum(len(c) for c in out)
         assert not any(v.startswith("rl") for c in out for v in c)
     return out
 

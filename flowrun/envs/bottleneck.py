@@ -73,7 +73,8 @@ class BottleneckEnv(Env):
     Observation: Flow's dummy ``[1]`` (``Box(-inf, inf, (1,))``). Action: none used
     (``Box(-inf, inf, (1,))``). Reward: the outflow over the last ``10 * sim_step`` s
     divided by ``2000 * scaling`` veh/h. Termination: collision; truncation: horizon.
-    ``info`` adds ``outflow`` (veh/h over the last ``10 * sim_step`` s) to the base's keys.
+    ``info`` adds ``outflow`` (veh/h over the last ``10 * sim_step`` s) and
+    ``lane_changes`` (all cars', since the episode's first observation) to the base's keys.
     Flow's ``smoothed_num`` (cars on edge ``4`` over the last 10 steps) is kept current.
     With ``disable_tb: false`` Flow's toll booth runs on node ``2``, with
     ``disable_ramp_metering: false`` its ALINEA ramp meter on node ``3``
@@ -149,5 +150,7 @@ class BottleneckEnv(Env):
 
     def _info(self, crash: bool) -> dict[str, Any]:
         info = super()._info(crash)
-        info["outflow"] = self.k.vehicle.get_outflow_rate(10 * self.sim_step)
+        vk = self.k.vehicle
+        info["outflow"] = vk.get_outflow_rate(10 * self.sim_step)
+        info["lane_changes"] = vk.num_lane_changes  # since the first observation (logged on)
         return info

@@ -44,6 +44,7 @@ class LaneChangeAccelEnv(AccelEnv):
     Reward: desired velocity, as :class:`AccelEnv`, minus 0.1 for every RL car that
     changed lane in the last simulation step (``info["reward_terms"]``:
     ``desired_velocity``, ``lane_change_penalty``); the mean speed in evaluate mode.
+    ``info["lane_changes"]``: lane changes of all cars since the episode's first observation.
     Termination: collision; truncation: horizon.
     """
 
@@ -71,6 +72,11 @@ class LaneChangeAccelEnv(AccelEnv):
         obs, info = super().reset(seed=seed, options=options)
         self.k.vehicle.lane_change_log()
         return obs, info
+
+    def _info(self, crash: bool) -> dict[str, Any]:
+        info = super()._info(crash)
+        info["lane_changes"] = self.k.vehicle.num_lane_changes  # all cars', this episode
+        return info
 
     def get_state(self) -> Any:
         """Speeds, positions and lanes, normalised to [0, 1]."""
