@@ -273,3 +273,28 @@ def test_desired_velocity_env_scales_with_the_network_and_redraws_the_inflow() -
             env.step(np.zeros(40, dtype=np.float32))
         assert all(2000 <= t <= 4000 for t in totals)  # the range times the scaling
         assert totals[0] == totals[2] != totals[1]  # drawn from the env's seeded generator
+
+
+def test_symmetric_control_has_one_action_per_segment() -> None:
+    with env_of("bottleneck_desired_velocity", "env.additional_params.symmetric=true",
+                "env.warmup_steps=0", "env.horizon=60") as env:  # fmt: skip
+        assert env.action_space.shape == (6,)  # 2 segments on each of edges 2, 3, 4
+        assert env.action_index == {"2": 0, "3": 2, "4": 4}
+        env.reset(seed=0)
+        vk = env.k.vehicle
+        cut = np.zeros(6, dtype=np.float32)
+        cut[2:4] = env.action_space.low[0]  # slow down only on edge 3
+        checked = {"free": 0, "cut": 0}
+        before: dict[str, str] = {}
+        for _ in range(60):
+            env.step(cut)
+            now = {rl: vk.get_edge(rl) for rl in vk.get_rl_ids()}
+            for rl, edge in now.items():
+                if edge in ("1", "2") and rl in before:  # not cut there: the speed limit
+                    assert vk.get_max_speed(rl) == pytest.approx(23.0)
+                    checked["free"] += 1
+                elif edge == before.get(rl) == "3":  # cut at least twice by now
+                    assert vk.get_max_speed(rl) < 23.0 - 1.0
+                    checked["cut"] += 1
+            before = now
+        assert checked["free"] > 0 and checked["cut"] > 0
