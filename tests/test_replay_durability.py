@@ -87,7 +87,10 @@ def test_csv_and_foxglove_never_overwrite(sumo_log: Path, tmp_path: Path) -> Non
     fox.write_bytes(b"mine")
     assert "exists" in _one_error(_replay(sumo_log, "--foxglove", fox))
     assert fox.read_bytes() == b"mine"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["copy.mcap", "states.csv"]
+    window = tmp_path / "window.mcap"
+    assert _replay(sumo_log, "--foxglove", window, "--from", "5", "--to", "6").exit_code == 0
+    assert [round(f.time, 1) for f in open_log(window).frames()][::10] == [5.0, 6.0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["copy.mcap", "states.csv", "window.mcap"]
 
 
 def test_repair_into_a_path_that_cannot_be_written(sumo_log: Path, tmp_path: Path) -> None:
