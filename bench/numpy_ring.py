@@ -14,6 +14,14 @@ Wall-clock numbers on a shared machine: the 1-minute load average is printed bef
 
     .venv/bin/python bench/numpy_ring.py [--config configs/ring_wave_numpy.yaml]
         [--rings 1 16 64 256 1024] [--steps 2000] [--learn 60000]
+
+Load-proof: instructions per vector step of B rings, counted by valgrind for two step counts
+(start-up cancels out in the difference), e.g. for B = 256:
+
+    for n in 200 600; do OPENBLAS_NUM_THREADS=1 PYTHONHASHSEED=0 setarch "$(uname -m)" -R \
+      valgrind --tool=callgrind --callgrind-out-file=/dev/null .venv/bin/python \
+      bench/numpy_ring.py --rings 256 --count $n 2>&1 | grep Collected; done
+    # (I_600 - I_200) / 400 instructions per vector step; / 256 per env step
 """
 
 from __future__ import annotations
@@ -22,6 +30,7 @@ import argparse
 import os
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -48,9 +57,23 @@ def main() -> None:
     parser.add_argument("--rings", type=int, nargs="+", default=[1, 16, 64, 256, 1024])
     parser.add_argument("--steps", type=int, default=2000, help="vector steps per measure")
     parser.add_argument("--learn", type=int, default=60000, help="env steps of TRPO learn")
+    parser.add_argument(
+        "--count",
+        type=int,
+        default=0,
+        help="only reset and run this many vector steps of --rings (valgrind)",
+    )
     args = parser.parse_args()
     torch.set_num_threads(1)
     plan = ring_plan(load_config(args.config))
+    if args.count:
+        venv = RingVecEnv(plan, args.rings[0])
+        venv.seed(0)
+        venv.reset()
+        zeros = np.zeros((args.rings[0], plan.rl_rows.size), dtype=np.float32)
+        for _ in range(args.count):
+            venv.step(zeros)
+        return
     print(
         f"load before: {os.getloadavg()[0]:.2f}; {args.config}: {plan.num_cars} cars, "
         f"{plan.rl_rows.size} RL, horizon {plan.horizon} + warm-up {plan.warmup}"
@@ -69,14 +92,14 @@ def main() -> None:
         wrapped = VecNormalize(VecMonitor(venv), gamma=0.999)
         wrapped.reset()
         wrap = rate(lambda v=wrapped, a=actions: v.step(a), b, steps)
+        n_steps = max(8, 6000 // b)
         model = TRPO("MlpPolicy", wrapped, policy_kwargs={"net_arch": [64, 64]}, device="cpu",
-                     n_steps=max(8, 6000 // b), batch_size=600, seed=0)  # fmt: skip
-        obs = wrapped.reset()
+                     n_steps=n_steps, batch_size=n_steps * b // 10, seed=0)  # fmt: skip
+        last: list[Any] = [wrapped.reset()]
 
-        def predict(m: TRPO = model, v: VecNormalize = wrapped) -> None:
-            nonlocal obs
-            action, _ = m.predict(obs, deterministic=False)
-            obs, *_ = v.step(action)
+        def predict(m: TRPO = model, v: VecNormalize = wrapped, last: list[Any] = last) -> None:
+            action, _ = m.predict(last[0], deterministic=False)
+            last[0] = v.step(action)[0]
 
         pred = rate(predict, b, steps)
         learn = float("nan")

@@ -138,7 +138,7 @@ class NoiseStreams:
         for j in cols.tolist():
             gen = self.gens[j]
             assert gen is not None, "restart() a ring before drawing its noise"
-            self.buf[j] = gen.standard_normal((NOISE_BLOCK, self.m))
+            gen.standard_normal((NOISE_BLOCK, self.m), out=self.buf[j])
             self.cursor[j] = 0
 
     def draw(self, cols: IntArray | None = None) -> FloatArray:
@@ -223,7 +223,7 @@ class RingPhysics:
         nxt = np.empty_like(v)
         limits = self._limits(b)
         k = 0
-        time = float(s.steps[0]) * dt if b else 0.0
+        time = float(s.steps[0] + 1) * dt if b else 0.0  # SUMO's clock (of the first ring)
         for g, (max_accel, max_decel, length, speed_limit) in zip(self.humans, limits, strict=True):
             sl = slice(g.start, g.stop)
             n = g.stop - g.start
@@ -261,10 +261,14 @@ class RingPhysics:
         s.speed = nxt
         s.odo = s.odo + nxt * dt
         u = s.u = s.start + s.odo
-        s.headway = s.of_leader(u) - u + s.offset
+        headway = s.of_leader(u)
+        headway -= u
+        headway += s.offset
+        s.headway = headway
         s.steps = s.steps + 1
-        crashed = np.asarray((s.headway < -NUMERICAL_EPS).any(axis=0))
-        return crashed
+        if headway.min() >= -NUMERICAL_EPS:
+            return np.zeros(b, dtype=bool)
+        return np.asarray((headway < -NUMERICAL_EPS).any(axis=0))
 
 
 @dataclass

@@ -74,7 +74,6 @@ class FastRings:
         self.collisions[cols] = 0
         self.episode_steps[cols] = 0
         part = self._warm_up(cols, part)
-        part.steps[:] = 0
         if self.state is None:
             if cols.size != self.num_rings or not np.array_equal(cols, np.arange(cols.size)):
                 raise ValueError("the first reset must start every ring, in order")

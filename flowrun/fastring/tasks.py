@@ -58,13 +58,16 @@ class RingTask:
             if not p.rl_rows.size:
                 return np.zeros((rings.num_rings, 3), dtype=np.float32)
             rl = int(p.rl_rows[0])
-            lead = s.leader[rl]
-            cols = np.arange(rings.num_rings)
+            if s.shared is not None:  # every ring has the same order: whole rows
+                lead_row = int(s.shared[0][rl])
+                u_lead, v_lead = s.u[lead_row], s.speed[lead_row]
+            else:
+                lead, cols = s.leader[rl], np.arange(rings.num_rings)
+                u_lead, v_lead = s.u[lead, cols], s.speed[lead, cols]
             x_av = np.mod(s.u[rl], s.length)
-            x_lead = np.mod(s.u[lead, cols], s.length)
-            gap = np.mod(x_lead - x_av, s.length)
-            obs = partial_observation(s.speed[rl], s.speed[lead, cols], gap, p.max_length)
-            return np.ascontiguousarray(obs.T, dtype=np.float32)
+            gap = np.mod(np.mod(u_lead, s.length) - x_av, s.length)
+            obs = partial_observation(s.speed[rl], v_lead, gap, p.max_length)
+            return obs.T.astype(np.float32)
         full = np.concatenate([s.speed / p.speed_limit, s.position / s.length])
         np.maximum(full, 0.0, out=full)
         np.minimum(full, 1.0, out=full)
