@@ -79,6 +79,10 @@ def test_lanes_drop_4s_2s_1s_through_zipper_merges(tmp_path: Path, scaling: int)
 def test_flow_names_and_bad_parameters() -> None:
     assert network_class("BottleneckScenario") is BottleneckNetwork is BottleneckScenario
     assert DesiredVelocityEnv is BottleneckDesiredVelocityEnv
+    from flowrun.envs.bottleneck import BottleneckAccelEnv as FlowPath  # Flow's module paths
+    from flowrun.envs.bottleneck_env import DesiredVelocityEnv as OldPath
+
+    assert (FlowPath, OldPath) == (BottleneckAccelEnv, BottleneckDesiredVelocityEnv)
     with pytest.raises(ConfigError, match="integer >= 1"):
         BottleneckNetwork.resolve_params({"scaling": 1.5})
     with pytest.raises(ConfigError, match="unknown parameter"):

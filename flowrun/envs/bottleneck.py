@@ -23,6 +23,25 @@ from flowrun.errors import ConfigError
 
 __all__ = ["ADDITIONAL_ENV_PARAMS", "MAX_LANES", "BottleneckEnv"]
 
+#: Flow's ``flow.envs.bottleneck`` also holds the RL envs: served from their modules
+_RL_NAMES = {
+    "BottleneckAccelEnv": "flowrun.envs.bottleneck_accel",
+    "ADDITIONAL_RL_ENV_PARAMS": "flowrun.envs.bottleneck_accel",
+    "BottleneckDesiredVelocityEnv": "flowrun.envs.bottleneck_velocity",
+    "DesiredVelocityEnv": "flowrun.envs.bottleneck_velocity",
+    "ADDITIONAL_VSL_ENV_PARAMS": "flowrun.envs.bottleneck_velocity",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Flow's import path ``flow.envs.bottleneck`` for the RL bottleneck envs."""
+    if name in _RL_NAMES:
+        import importlib
+
+        return getattr(importlib.import_module(_RL_NAMES[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 #: Flow's constants: the edges in driving order, the length of the bottleneck (edge ``4``,
 #: m), and the vehicle count that normalises observations.
 EDGE_LIST = ("1", "2", "3", "4", "5")
