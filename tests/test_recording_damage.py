@@ -296,3 +296,32 @@ def test_a_window_read_does_not_trust_the_times_of_a_damaged_scanned_chunk(
     path.write_bytes(bytes(data))
     want = [f.step for f in open_log(intact.path).frames(5.0, 25.0)]
     assert [f.step for f in open_log(path).frames(5.0, 25.0)] == want
+
+
+def test_zeroed_disk_blocks_are_detected_or_harmless(
+    intact: Intact, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # a lost 4 KiB sector reads back as zeros: several records damaged at once
+    rng = np.random.default_rng(SEED + 3)
+    tally: Counter[str] = Counter()
+    for i, block in enumerate(rng.choice(len(intact.data) // 4096, size=12, replace=False)):
+        data = bytearray(intact.data)
+        data[block * 4096 : (block + 1) * 4096] = bytes(4096)
+        path = tmp_path / f"zeroed_{i}.mcap"
+        path.write_bytes(bytes(data))
+        tally[_check(intact, path)] += 1
+    with capsys.disabled():
+        print(f"\nzeroed 4 KiB blocks (12): {dict(tally)}")
+    assert tally["error"] == 0
+
+
+def test_a_zeroed_start_of_a_finished_log_costs_its_metadata_only(
+    intact: Intact, tmp_path: Path
+) -> None:
+    data = bytearray(intact.data)
+    data[:4096] = bytes(4096)  # magic, header, metadata, attachments, first chunk(s)
+    path = tmp_path / "start.mcap"
+    path.write_bytes(bytes(data))
+    log = open_log(path)
+    assert {"magic", "metadata"} <= {x.part for x in log.damage.losses}
+    assert _messages(path).items() <= intact.messages.items()

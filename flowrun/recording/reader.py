@@ -430,6 +430,18 @@ class McapLog:
             yield decode_signals(message.data)
 
 
+def _ends_with_magic(path: Path) -> bool:
+    try:
+        with open(path, "rb") as f:
+            f.seek(0, os.SEEK_END)
+            if f.tell() < 2 * len(MCAP_MAGIC):
+                return False
+            f.seek(-len(MCAP_MAGIC), os.SEEK_END)
+            return f.read() == MCAP_MAGIC
+    except OSError:
+        return False
+
+
 def open_log(path: str | os.PathLike[str]) -> McapLog:
     """Open a flowrun MCAP log; a damaged/unfinished one is salvaged with a warning.
 
@@ -450,10 +462,10 @@ def open_log(path: str | os.PathLike[str]) -> McapLog:
         raise RecordingError(f"cannot read {p}: {err.strerror or err}") from None
     if head[:8] == MCAP_MAGIC:
         return McapLog(p)
-    # One damaged byte in the magic must not cost the log: accept 7 of 8 magic bytes
-    # followed by a Header record (opcode 0x01), and say so.
+    # A damaged start must not cost the log: accept 7 of 8 magic bytes followed by a Header
+    # record (opcode 0x01), or a file that ends with the magic (a footer), and say so.
     same = sum(a == b for a, b in zip(head, MCAP_MAGIC, strict=False))
-    if same >= len(MCAP_MAGIC) - 1 and head[8:9] == b"\x01":
+    if (same >= len(MCAP_MAGIC) - 1 and head[8:9] == b"\x01") or _ends_with_magic(p):
         return McapLog(p, Loss("magic", 0, "the leading magic bytes are damaged"))
     raise RecordingError(
         f"{p} is not an MCAP file (it does not start with the MCAP magic bytes); "
