@@ -179,6 +179,18 @@ SUMO_COLOURS = ("red", "green", "blue", "yellow", "cyan", "magenta", "orange", "
 SUMO_ID_FORBIDDEN = " \t\n\r|\\'\";,<>&"
 
 
+#: SUMO's ``departSpeed`` keywords.
+DEPART_SPEEDS = ("random", "max", "desired", "speedLimit", "last", "avg")
+
+
+def _depart_speed(value: Any) -> str | None:
+    if isinstance(value, str):
+        if value in DEPART_SPEEDS:
+            return None
+        return f"{one_of('departure speed', DEPART_SPEEDS)(value)} (or a speed in m/s)"
+    return at_least(0, high=MAX_SPEED, unit=" m/s")(value)
+
+
 def _vehicle_id(value: Any) -> str | None:
     if not value:
         return "must not be empty"
@@ -273,6 +285,7 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (InFlow, "begin"): at_least(1, "vehicles placed at reset come first", high=1e9),
     (InFlow, "number"): at_least(1, high=MAX_VEHICLES),
     (InFlow, "end"): at_least(0, high=1e9),
+    (InFlow, "depart_speed"): _depart_speed,
     (TrainConfig, "algorithm"): one_of("algorithm", ALGORITHMS),
     (TrainConfig, "total_timesteps"): at_least(1, high=1e13),
     (TrainConfig, "n_envs"): at_least(1, high=1024),

@@ -17,6 +17,7 @@ setting to change:
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from collections.abc import Callable
 from typing import Any
@@ -71,6 +72,8 @@ POSITIVE_ENV_PARAMS = ("max_accel", "max_decel", "target_velocity", "switch_time
                        "lane_change_duration", "max_speed")  # fmt: skip
 #: ... integers >= 0.
 COUNT_ENV_PARAMS = ("num_rl", "num_observed", "num_local_edges", "num_local_lights")
+#: Widest policy layer accepted in ``train.policy_kwargs.net_arch``.
+MAX_LAYER = 100_000
 #: Largest number an environment parameter may be (beyond it spaces and rewards overflow).
 MAX_ENV_NUMBER = 1e9
 
@@ -123,27 +126,43 @@ def _finite_numbers(value: Any, at: KeyPath, loc: Locations) -> None:
             _finite_numbers(item, (*at, i), loc)
 
 
-def _same_kind(value: Any, default: Any, at: KeyPath, loc: Locations) -> None:
-    def kind(x: Any) -> str:
-        if isinstance(x, bool):
-            return "true or false"
-        if isinstance(x, int | float):
-            return "a number"
-        if isinstance(x, str):
-            return "text"
-        if isinstance(x, list | tuple):
-            return "a list"
-        return "a mapping" if isinstance(x, dict) else type(x).__name__
+def _kind(x: Any) -> str:
+    if isinstance(x, bool):
+        return "true or false"
+    if isinstance(x, int | float):
+        return "a number"
+    if isinstance(x, str):
+        return "text"
+    if isinstance(x, list | tuple):
+        return "a list"
+    return "a mapping" if isinstance(x, dict) else type(x).__name__
 
-    if value is None:
+
+def _same_kind(value: Any, default: Any, at: KeyPath, loc: Locations) -> None:
+    """``value`` has the shape of the env's ``default``: same kind; a list of numbers as long
+    (``[low, high]``); a list of like items, each shaped like them; a mapping's shared keys."""
+    if value is None or default is None:
         return
-    if kind(value) != kind(default):
-        raise loc.error(f"expected {kind(default)} (default {default!r}), got {value!r}", at)
-    if isinstance(default, list | tuple) and default and len(value) != len(default):
+    if _kind(value) != _kind(default):
+        raise loc.error(f"expected {_kind(default)} (default {default!r}), got {value!r}", at)
+    if isinstance(default, dict):
+        for key in set(value) & set(default):
+            _same_kind(value[key], default[key], (*at, key), loc)
+    if not isinstance(default, list | tuple) or not default:
+        return
+    kinds = {_kind(d) for d in default}
+    if kinds == {"a number"} and len(value) != len(default):
         raise loc.error(
-            f"expected a list of {len(default)} values (default {list(default)!r}), got {value!r}",
+            f"expected a list of {len(default)} numbers (default {list(default)!r}), "
+            f"got {value!r}",
             at,
         )
+    if len(kinds) == 1:
+        for i, item in enumerate(value):
+            _same_kind(item, default[0], (*at, i), loc)
+    elif len(value) == len(default):  # a record such as ("1", 1, False)
+        for i, (item, like) in enumerate(zip(value, default, strict=True)):
+            _same_kind(item, like, (*at, i), loc)
 
 
 def _check_network_inputs(cfg: ExperimentConfig, network: Any, loc: Locations) -> None:
@@ -205,7 +224,26 @@ def _check_start(cfg: ExperimentConfig, network: Any, loc: Locations) -> None:
 
 def _check_train_values(cfg: ExperimentConfig, loc: Locations) -> None:
     train = cfg.train
-    if train is None or train.backend != "sb3" or not train.hyperparams:
+    if train is None:
+        return
+    for f in dataclasses.fields(train):  # hyperparams, policy_kwargs, the backends' own
+        value = getattr(train, f.name)
+        if isinstance(value, dict):
+            _finite_numbers(value, ("train", f.name), loc)
+    arch = train.policy_kwargs.get("net_arch")
+    layers = list(arch.values()) if isinstance(arch, dict) else [arch]
+    for layer in layers:
+        if layer is None:
+            continue
+        sizes = layer if isinstance(layer, list) else [layer]
+        if not all(isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= MAX_LAYER
+                   for n in sizes):  # fmt: skip
+            raise loc.error(
+                f"expected layer sizes (integers 1 to {MAX_LAYER}) as [64, 64] or "
+                f"{{pi: [64], vf: [64]}}, got {arch!r}",
+                ("train", "policy_kwargs", "net_arch"),
+            )
+    if train.backend != "sb3" or not train.hyperparams:
         return
     check = optional("flowrun.training.algorithms", "check_hyperparam_values")
     if check is None:
