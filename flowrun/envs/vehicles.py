@@ -9,6 +9,7 @@ import numpy as np
 
 from flowrun.config.params import VehicleParams
 from flowrun.controllers.base import AccelerationController
+from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.controllers.registry import build_controller, resolve_controller
 from flowrun.controllers.view import VehicleControllerView
 from flowrun.kernel.population import Population, VehicleClass, VehicleTable
@@ -60,7 +61,7 @@ def build_controllers(vehicles: VehicleParams) -> list[GroupControl]:
         idx = np.arange(start, start + g.num_vehicles)
         start += g.num_vehicles
         spec = g.acceleration_controller
-        ctrl: Any = build_controller(spec.type, dict(spec.params))
+        ctrl: Any = build_controller(spec.cls or spec.type, dict(spec.params))
         controls.append(GroupControl(g.veh_id, idx, ctrl))
     return controls
 
@@ -150,8 +151,12 @@ class FlowControllers:
         self._lane: dict[int, Any] = {}
         self._route: dict[int, Any] = {}
 
-    def acceleration(self, veh_id: str, group: int) -> VehicleControllerView:
-        """The vehicle's acceleration controller with Flow's ``get_action(env)``."""
+    def acceleration(self, veh_id: str, group: int) -> Any:
+        """The vehicle's acceleration controller with Flow's ``get_action(env)`` (a Flow-style
+        class's own object for that vehicle)."""
+        ctrl = self._controls[group].controller
+        if isinstance(ctrl, PerVehicleGroup):
+            return ctrl.instance(veh_id)
         if veh_id not in self._views:
             g = self._vehicles.groups[group]
             self._views[veh_id] = VehicleControllerView(
