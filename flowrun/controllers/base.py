@@ -12,6 +12,7 @@ its class attributes ``is_rl`` / ``commands_sumo`` say so up front.
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -151,19 +152,27 @@ class AccelerationController:
     acceleration noise, ``sqrt(dt) * N(0, noise)``, drawn from the generator it is given, then
     runs the requested fail-safes (see :mod:`flowrun.controllers.fail_safe`).
 
-    Flow's per-vehicle constructor arguments are accepted too: ``veh_id`` (Flow passes it
-    first, positionally) and ``car_following_params`` (the vehicle type's
-    ``SumoCarFollowingParams``). When the kernel's inputs carry no ``max_accel`` /
-    ``max_decel``, the limits of ``car_following_params`` are used instead.
+    The constructor is Flow's ``BaseController(veh_id, car_following_params, delay=0,
+    fail_safe=None, noise=0, display_warnings=True)``. When the kernel's inputs carry no
+    ``max_accel`` / ``max_decel``, the limits of ``car_following_params`` are used instead.
+
+    **Flow-style controllers.** A subclass that implements Flow's per-vehicle
+    ``get_accel(self, env)`` instead of ``_accel`` is a *per-vehicle* controller
+    (``per_vehicle = True``): the environment makes one object per vehicle, as Flow does,
+    and calls Flow's :meth:`get_action` on each every step (noise and fail-safes applied as
+    Flow applies them). The built-in vectorised controllers stay the fast path.
 
     Args:
-        noise: standard deviation of the acceleration noise, m/s^2 per sqrt(s).
+        veh_id: Flow's vehicle id (informative for a vectorised controller, which drives a
+            whole group).
+        car_following_params: the vehicle type's car-following parameters, or ``None``.
+        delay: reaction delay used by the ``safe_velocity`` fail-safe, s (keyword
+            ``time_delay`` is the same).
         fail_safe: Flow's fail-safe name(s): ``instantaneous``, ``safe_velocity``,
             ``feasible_accel``, ``obey_speed_limit`` (or a list of them), or ``None``.
-        time_delay: reaction delay used by the ``safe_velocity`` fail-safe, s.
-        veh_id: Flow's vehicle id (informative: one flowrun controller drives a group).
-        car_following_params: the vehicle type's car-following parameters, or ``None``.
+        noise: standard deviation of the acceleration noise, m/s^2 per sqrt(s).
         display_warnings: accepted for Flow compatibility (flowrun never prints).
+        time_delay: flowrun's keyword for ``delay``.
 
     Attributes:
         registered_name: the name configs use (``type: IDM``).
@@ -177,27 +186,45 @@ class AccelerationController:
     commands_sumo: ClassVar[bool] = True
     is_rl: ClassVar[bool] = False
     stateful: ClassVar[bool] = False
+    #: ``True`` for a Flow-style subclass whose ``get_accel(env)`` drives one vehicle
+    per_vehicle: ClassVar[bool] = False
 
     def __init__(
         self,
-        noise: float = 0.0,
-        fail_safe: str | Sequence[str] | None = None,
-        time_delay: float = 0.0,
-        *,
         veh_id: str | None = None,
         car_following_params: Any = None,
+        delay: float = 0.0,
+        fail_safe: str | Sequence[str] | None = None,
+        noise: float = 0.0,
         display_warnings: bool = True,
+        *,
+        time_delay: float | None = None,
     ) -> None:
         me = type(self).__name__
         self.noise = number(me, "noise", noise, low=0)
         self.fail_safe: tuple[str, ...] = check_fail_safe(fail_safe)
-        self.time_delay = number(me, "time_delay", time_delay, low=0)
+        delay = delay if time_delay is None else time_delay
+        self.time_delay = number(me, "time_delay", delay, low=0)
         if veh_id is not None and not isinstance(veh_id, str):
             raise ValueError(f"{me}: veh_id must be a vehicle id string, got {veh_id!r}")
         self.veh_id = veh_id
         self.car_following_params = car_following_params
         self.display_warnings = bool(display_warnings)
         self._limits = vehicle_limits(car_following_params)
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls.per_vehicle = takes_env_only(cls.get_accel)
+
+    @property
+    def delay(self) -> float:
+        """Flow's name of :attr:`time_delay` (s)."""
+        return self.time_delay
+
+    @property
+    def accel_noise(self) -> float:
+        """Flow's name of :attr:`noise` (m/s^2 per sqrt(s))."""
+        return self.noise
 
     @property
     def max_accel(self) -> float:
@@ -240,4 +267,27 @@ class AccelerationController:
         return accel
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
-        raise NotImplementedError
+        raise NotImplementedError(
+            f"{type(self).__name__} implements neither flowrun's _accel(inputs) nor Flow's "
+            "get_accel(env)"
+        )
+
+    def get_action(self, env: Any) -> float | None:
+        """Flow's ``get_action(env)``: this vehicle's acceleration with noise and fail-safes
+        (m/s^2), or ``None`` when SUMO drives it this step (see
+        :func:`flowrun.controllers.per_vehicle.flow_action`)."""
+        from flowrun.controllers.per_vehicle import flow_action
+
+        return flow_action(self, env)
+
+
+def takes_env_only(method: Any) -> bool:
+    """Whether ``method`` is Flow's per-vehicle form ``f(self, env)`` (one argument besides
+    ``self``), as opposed to flowrun's vectorised ``f(self, inputs, rng)``."""
+    try:
+        params = list(inspect.signature(method).parameters.values())
+    except (TypeError, ValueError):
+        return False
+    positional = [p for p in params[1:] if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    required = [p for p in positional if p.default is p.empty]
+    return len(positional) == 1 and len(required) == 1

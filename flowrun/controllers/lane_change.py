@@ -12,6 +12,8 @@ from typing import Any, ClassVar
 import numpy as np
 import numpy.typing as npt
 
+from flowrun.controllers.base import takes_env_only
+
 IntArray = npt.NDArray[np.int_]
 
 
@@ -30,14 +32,33 @@ class LaneChangeController:
     registered_name: ClassVar[str] = ""
     aliases: ClassVar[tuple[str, ...]] = ()
     commands_sumo: ClassVar[bool] = True
+    #: ``True`` for a Flow-style subclass implementing ``get_lane_change_action(env)``: the
+    #: environment makes one per vehicle and applies its answer every step
+    per_vehicle: ClassVar[bool] = False
 
     def __init__(self, veh_id: str | None = None, lane_change_params: Any = None) -> None:
         self.veh_id = veh_id
         self.lane_change_params = lane_change_params
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        own = cls.get_lane_change_action is not LaneChangeController.get_lane_change_action
+        cls.per_vehicle = own and takes_env_only(cls.get_lane_change_action)
+
     def get_lane_change(self, num_vehicles: int) -> IntArray | None:
         """Directions (``+1`` left, ``-1`` right, ``0`` stay), or ``None``: SUMO decides."""
         raise NotImplementedError
+
+    def get_lane_change_action(self, env: Any) -> int | None:
+        """Flow's per-vehicle hook: this vehicle's direction (``-1``, ``0``, ``1``) or
+        ``None``. A Flow-style subclass implements it; the built-ins answer from
+        :meth:`get_lane_change`."""
+        directions = self.get_lane_change(1)
+        return None if directions is None else int(directions[0])
+
+    def get_action(self, env: Any) -> int | None:
+        """Flow's ``get_action(env)``: :meth:`get_lane_change_action`."""
+        return self.get_lane_change_action(env)
 
 
 class SimLaneChangeController(LaneChangeController):

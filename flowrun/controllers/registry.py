@@ -29,6 +29,7 @@ from flowrun.controllers.lane_change import (
     SimLaneChangeController,
     StaticLaneChanger,
 )
+from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.controllers.rl import RLController, SimCarFollowingController
 from flowrun.controllers.routing import ContinuousRouter, GridRouter, Router
 from flowrun.controllers.velocity import FollowerStopper, PISaturation
@@ -166,7 +167,7 @@ def resolve_controller(name: str, kind: ControllerKind | None = None) -> type[An
 
 
 def build_controller(
-    name: str,
+    name: str | type,
     params: Mapping[str, Any] | None = None,
     kind: ControllerKind | None = None,
     *,
@@ -175,16 +176,32 @@ def build_controller(
 ) -> Any:
     """Instantiate the controller ``name`` with keyword ``params``.
 
+    ``name`` may also be the class itself (Flow's ``(MyController, {...})``).
     ``veh_id`` and ``car_following_params`` are passed on when the constructor takes them
     and they are given (or the constructor requires them, as a Flow-style user class does).
+
+    A Flow-style acceleration class (``get_accel(self, env)``, see
+    :mod:`flowrun.controllers.per_vehicle`) gives a :class:`PerVehicleGroup` that makes one
+    object per vehicle; a Flow-style router gets ``params`` as Flow's ``router_params``.
 
     Raises:
         ConfigError: unknown controller, unknown parameter (with a did-you-mean against the
             constructor's parameters), or a value the constructor refuses. When the error is
             about one parameter, ``ConfigError.path`` is that parameter's name.
     """
-    cls = resolve_controller(name, kind)
+    if isinstance(name, type):
+        cls: type[Any] = name
+        found = controller_kind(cls)
+        if kind is not None and found != kind:
+            raise ConfigError(
+                f"{cls.__name__} is {_article(found)} controller, but {_article(kind)} "
+                "controller is expected here"
+            )
+    else:
+        cls = resolve_controller(name, kind)
     params = dict(params or {})
+    if issubclass(cls, Router) and cls.per_vehicle:  # Flow: Cls(veh_id, router_params=params)
+        return _construct(cls, {"veh_id": veh_id, "router_params": params})
     signature = inspect.signature(cls)
     accepted = [
         p.name
@@ -201,10 +218,17 @@ def build_controller(
                     f"{did_you_mean(str(key), accepted)}; expected: {expected}",
                     path=str(key),
                 )
+    if issubclass(cls, AccelerationController) and cls.per_vehicle:
+        return PerVehicleGroup(cls, params, car_following_params)
     for extra, value in (("veh_id", veh_id), ("car_following_params", car_following_params)):
         p = signature.parameters.get(extra)
         if p is not None and (value is not None or p.default is p.empty):
             params[extra] = value
+    return _construct(cls, params)
+
+
+def _construct(cls: type[Any], params: dict[str, Any]) -> Any:
+    """``cls(**params)``, a refused value reported as a :class:`ConfigError`."""
     try:
         return cls(**params)
     except (ValueError, TypeError) as exc:

@@ -13,6 +13,8 @@ from typing import Any, ClassVar
 import numpy as np
 import numpy.typing as npt
 
+from flowrun.controllers.base import takes_env_only
+
 RouteChoice = tuple[Sequence[str], float]
 
 
@@ -52,10 +54,18 @@ class Router:
 
     registered_name: ClassVar[str] = ""
     aliases: ClassVar[tuple[str, ...]] = ()
+    #: ``True`` for a Flow-style subclass implementing ``choose_route(env)``: the
+    #: environment makes one per vehicle (``Cls(veh_id=..., router_params=params)``) and
+    #: applies its route every step
+    per_vehicle: ClassVar[bool] = False
 
     def __init__(self, veh_id: str | None = None, router_params: Any = None) -> None:
         self.veh_id = veh_id
         self.router_params = router_params
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls.per_vehicle = takes_env_only(cls.choose_route)
 
     def reroute_mask(
         self, edges_left: Sequence[int] | npt.NDArray[np.int_]

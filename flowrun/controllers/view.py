@@ -69,6 +69,45 @@ def _length(vk: Any, veh_id: str) -> np.ndarray | None:
     return None if get_length is None else np.array([float(get_length(veh_id))])
 
 
+def read_inputs(
+    env: Any, veh_id: str, max_accel: float, max_decel: float
+) -> CarFollowingInputs:
+    """One vehicle's :class:`CarFollowingInputs`, read through ``env.k.vehicle`` getters.
+
+    Args:
+        env: the environment (Flow's ``env``).
+        veh_id: the vehicle.
+        max_accel: its maximum acceleration, m/s^2.
+        max_decel: its maximum deceleration, m/s^2 (positive).
+    """
+    vk = env.k.vehicle
+    v = float(vk.get_speed(veh_id))
+    lead = vk.get_leader(veh_id)
+    if lead:
+        h, v_lead = float(vk.get_headway(veh_id)), float(vk.get_speed(lead))
+    else:
+        h, v_lead = math.inf, v
+    follower = vk.get_follower(veh_id)
+    if follower:
+        h_f, v_f = float(vk.get_headway(follower)), float(vk.get_speed(follower))
+    else:
+        h_f, v_f = math.inf, v
+    edge = vk.get_edge(veh_id)
+    return CarFollowingInputs(
+        speed=np.array([v]),
+        headway=np.array([h]),
+        leader_speed=np.array([v_lead]),
+        follower_headway=np.array([h_f]),
+        follower_speed=np.array([v_f]),
+        speed_limit=np.array([_speed_limit(env, edge)]),
+        dt=_sim_step(env),
+        time=_sim_time(env),
+        max_accel=np.array([max_accel]),
+        max_decel=np.array([max_decel]),
+        length=_length(vk, veh_id),
+    )
+
+
 class VehicleControllerView:
     """One vehicle's acceleration controller, with Flow's ``BaseController`` interface.
 
@@ -130,32 +169,7 @@ class VehicleControllerView:
 
     def inputs(self, env: Any) -> CarFollowingInputs:
         """The one-vehicle :class:`CarFollowingInputs` read from ``env.k.vehicle``."""
-        vk = env.k.vehicle
-        v = float(vk.get_speed(self.veh_id))
-        lead = vk.get_leader(self.veh_id)
-        if lead:
-            h, v_lead = float(vk.get_headway(self.veh_id)), float(vk.get_speed(lead))
-        else:
-            h, v_lead = math.inf, v
-        follower = vk.get_follower(self.veh_id)
-        if follower:
-            h_f, v_f = float(vk.get_headway(follower)), float(vk.get_speed(follower))
-        else:
-            h_f, v_f = math.inf, v
-        edge = vk.get_edge(self.veh_id)
-        return CarFollowingInputs(
-            speed=np.array([v]),
-            headway=np.array([h]),
-            leader_speed=np.array([v_lead]),
-            follower_headway=np.array([h_f]),
-            follower_speed=np.array([v_f]),
-            speed_limit=np.array([_speed_limit(env, edge)]),
-            dt=_sim_step(env),
-            time=_sim_time(env),
-            max_accel=np.array([self.max_accel]),
-            max_decel=np.array([self.max_deaccel]),
-            length=_length(vk, self.veh_id),
-        )
+        return read_inputs(env, self.veh_id, self.max_accel, self.max_deaccel)
 
     def _generator(self, env: Any) -> np.random.Generator:
         if self._rng is not None:

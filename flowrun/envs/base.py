@@ -25,6 +25,7 @@ import numpy as np
 
 from flowrun.config.params import EnvParams, SumoParams
 from flowrun.config.validate import check_params
+from flowrun.controllers.per_vehicle import FlowStyleDriver, PerVehicleGroup
 from flowrun.envs.frames import StepRecord, complete_frames, step_record
 from flowrun.envs.render import render_ring
 from flowrun.envs.vehicles import (
@@ -125,6 +126,10 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         self.k = Kernel(sim_params, self.work_dir, gui=gui)
         self.k.network = NetworkKernel(network.spec, network=network)  # Flow: before reset
         self.controls: list[GroupControl] = build_controllers(network.vehicles)
+        for group, control in zip(network.vehicles.groups, self.controls, strict=True):
+            if isinstance(control.controller, PerVehicleGroup):  # Flow-style get_accel(env)
+                control.controller.bind(group.car_following_params)
+        self._flow_style = FlowStyleDriver(network.vehicles)
         self.step_counter = 0
         self.time_counter = 0
         self.record_frames = False
@@ -237,6 +242,9 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
             control.version = -1
             control.index = np.zeros(0, dtype=np.int64)
             control.controller.reset(0)
+            if isinstance(control.controller, PerVehicleGroup):
+                control.controller.vehicles.clear()
+        self._flow_style.clear()
         self.step_counter = 0
         self.time_counter = 0
         self.records = []
@@ -295,8 +303,13 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
             control.follow(vk.table, gi)
             if control.index.size == 0:
                 continue
-            accel = c.get_accel(vk.inputs(control.sl, t), self._ctrl_rng)
+            if isinstance(c, PerVehicleGroup):  # Flow-style: one object per vehicle
+                accel = c.actions(self, [vk.table.ids[i] for i in control.index])
+            else:
+                accel = c.get_accel(vk.inputs(control.sl, t), self._ctrl_rng)
             vk.apply_acceleration_idx(control.sl, accel)
+        if self._flow_style:  # Flow-style lane-change and routing controllers, Flow's order
+            self._flow_style.step(self)
         if action is not None:  # already clipped by ``step``
             self._apply_rl_actions(action)
         self.additional_command()
@@ -304,6 +317,16 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
             self.k.vehicle.update_vehicle_colors()
         self.k.step()
         self._emit_frame()
+
+    @property
+    def available_routes(self) -> dict[str, list[tuple[list[str], float]]]:
+        """Flow's ``env.available_routes``: ``k.network.rts``, for routing controllers."""
+        return self.k.network.rts
+
+    @property
+    def controller_rng(self) -> np.random.Generator:
+        """Generator of the controllers' noise (drawn afresh from the seed at every reset)."""
+        return self._ctrl_rng
 
     def apply_rl_actions(self, rl_actions: Any = None) -> None:
         """Clip (if asked) and apply the agent's action; ``None`` does nothing."""

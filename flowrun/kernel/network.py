@@ -170,9 +170,11 @@ class NetworkKernel:
         return edge, x - start
 
     @property
-    def rts(self) -> dict[str, tuple[str, ...]]:
-        """Routes by starting edge (Flow's ``rts``)."""
-        return dict(self.spec.routes)
+    def rts(self) -> dict[str, list[tuple[list[str], float]]]:
+        """Routes by starting edge, each a list of ``(edges, probability)`` (Flow's ``rts``,
+        which Flow's routers read as ``env.available_routes``)."""
+        edges = dict.fromkeys((*self.spec.routes, *self.spec.route_choices))
+        return {e: [(list(r), float(p)) for r, p in self.spec.choices(e)] for e in edges}
 
     @property
     def total_edgestarts_dict(self) -> dict[str, float]:
