@@ -104,7 +104,7 @@ def test_stream_readers_validate_every_crc_and_see_every_message() -> None:
     assert sum(isinstance(r, Attachment) for r in records) == 1
     # schemas/channels precede the first chunk; the summary repeats them
     assert [type(r) for r in records[3:6]] == [Schema, Channel, Channel]
-    reader = make_reader(_NoSeek(data), validate_crcs=True)  # the non-seeking reader
+    reader = make_reader(_NoSeek(data), validate_crcs=True)  # type: ignore[arg-type]  # non-seeking
     assert [m.data for _, _, m in reader.iter_messages()] == [d for _, _, d in added]
 
 
@@ -166,7 +166,7 @@ def test_message_data_is_copied_and_bad_calls_are_refused() -> None:
     writer = McapWriter(stream)
     channel = writer.register_channel("/t", "json")
     buffer = bytearray(b"before")
-    writer.add_message(channel, 1, buffer, 1)
+    writer.add_message(channel, 1, buffer, 1)  # type: ignore[arg-type]
     buffer[:] = b"after!"
     with pytest.raises(RecordingError, match="not registered"):
         writer.add_message(channel + 1, 2, b"x", 2)

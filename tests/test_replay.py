@@ -165,5 +165,5 @@ def test_vehicles_leaving_mid_run_are_all_counted_and_filtered(tmp_path: Path) -
     assert summarize(log).vehicles_by_type == {"hdv": 1, "idm": 5, "rl": 1}
     got = [f.ids for f in log.frames(vehicles=["extra", "idm_5"])]
     assert got == [["idm_5"]] * 20 + [["extra"]] * 20
-    _, _, _, ids = time_space_data(log, vehicles=["extra"])
-    assert ids.tolist() == ["extra"] * 20
+    _, _, _, extra_ids = time_space_data(log, vehicles=["extra"])
+    assert extra_ids.tolist() == ["extra"] * 20

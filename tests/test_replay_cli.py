@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 import typer
 from mcap.reader import make_reader
-from typer.testing import CliRunner
+from typer.testing import CliRunner, Result
 
 from flowrun.cli.commands_replay import register
 from flowrun.recording import McapRecorder, open_log
@@ -35,15 +35,15 @@ def _record(path: Path, steps: int = 200, chunk_size: int = 4 * 1024 * 1024) -> 
     return path
 
 
-def run(app: typer.Typer, *args: object) -> object:
+def run(app: typer.Typer, *args: object) -> Result:
     return CliRunner().invoke(app, ["replay", *map(str, args)])
 
 
 def test_summary_table(app: typer.Typer, tmp_path: Path) -> None:
     log = _record(tmp_path / "a.mcap")
     result = run(app, log)
-    assert result.exit_code == 0, result.output  # type: ignore[attr-defined]
-    out = result.stdout  # type: ignore[attr-defined]
+    assert result.exit_code == 0, result.output
+    out = result.stdout
     for label in ("mean speed", "min speed", "collisions", "idm: 21", "ring (seed 0)"):
         assert label in out
 
@@ -66,7 +66,7 @@ def test_window_vehicles_csv_and_plots(app: typer.Typer, tmp_path: Path) -> None
         "--out",
         tmp_path / "plots",
     )
-    assert result.exit_code == 0, result.output  # type: ignore[attr-defined]
+    assert result.exit_code == 0, result.output
     assert len((tmp_path / "e.csv").read_text().splitlines()) == 1 + 2 * 51
     for name in ("speeds.png", "time_space.png", "vehicle_speeds.png"):
         assert (tmp_path / "plots" / name).stat().st_size > 0
@@ -76,8 +76,8 @@ def test_compare_two_logs(app: typer.Typer, tmp_path: Path) -> None:
     a = _record(tmp_path / "a.mcap")
     b = _record(tmp_path / "b.mcap", steps=100)
     result = run(app, a, b, "--plot", "speed", "--out", tmp_path / "p")
-    assert result.exit_code == 0, result.output  # type: ignore[attr-defined]
-    assert "A: a.mcap" in result.stdout and "B: b.mcap" in result.stdout  # type: ignore[attr-defined]
+    assert result.exit_code == 0, result.output
+    assert "A: a.mcap" in result.stdout and "B: b.mcap" in result.stdout
     assert (tmp_path / "p" / "speeds.png").exists()
 
 
@@ -86,9 +86,9 @@ def test_not_mcap_is_one_line_error(app: typer.Typer, tmp_path: Path) -> None:
     bad.write_text("not a log\n")
     result = run(app, bad)
     assert result.exit_code == 1
-    err = result.stderr  # type: ignore[attr-defined]
+    err = result.stderr
     assert "not an MCAP file" in err and len(err.strip().splitlines()) == 1
-    assert "Traceback" not in result.output  # type: ignore[attr-defined]
+    assert "Traceback" not in result.output
 
 
 def test_truncated_log_is_salvaged_with_a_warning(app: typer.Typer, tmp_path: Path) -> None:
@@ -96,8 +96,8 @@ def test_truncated_log_is_salvaged_with_a_warning(app: typer.Typer, tmp_path: Pa
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(log.read_bytes()[: log.stat().st_size * 2 // 3])
     result = run(app, cut)
-    assert result.exit_code == 0, result.output  # type: ignore[attr-defined]
-    assert "salvaged" in result.stderr  # type: ignore[attr-defined]
+    assert result.exit_code == 0, result.output
+    assert "salvaged" in result.stderr
 
 
 def test_repair_writes_clean_copy(app: typer.Typer, tmp_path: Path) -> None:
@@ -106,7 +106,7 @@ def test_repair_writes_clean_copy(app: typer.Typer, tmp_path: Path) -> None:
     cut.write_bytes(log.read_bytes()[: log.stat().st_size // 2])
     fixed = tmp_path / "fixed.mcap"
     result = run(app, "--repair", cut, fixed)
-    assert result.exit_code == 0, result.output  # type: ignore[attr-defined]
+    assert result.exit_code == 0, result.output
     with open(fixed, "rb") as f:
         assert make_reader(f).get_summary() is not None
     assert not open_log(fixed).salvaged
@@ -118,7 +118,7 @@ def test_foxglove_export_of_a_window(app: typer.Typer, tmp_path: Path) -> None:
     log = _record(tmp_path / "a.mcap")
     out = tmp_path / "fox.mcap"
     result = run(app, log, "--from", 1, "--to", 2, "--vehicles", "rl_0", "--foxglove", out)
-    assert result.exit_code == 0, result.output  # type: ignore[attr-defined]
+    assert result.exit_code == 0, result.output
     frames = list(open_log(out).frames())
     assert len(frames) == 11 and all(f.ids == ["rl_0"] for f in frames)
 
