@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from flowrun.errors import RecordingError
-from flowrun.recording import McapRecorder, open_log
+from flowrun.recording import McapRecorder, open_log, repair
 from flowrun.recording.synthetic import ring_frames
 from flowrun.replay import summarize, summary_rows, to_csv
 
@@ -325,3 +325,23 @@ def test_a_zeroed_start_of_a_finished_log_costs_its_metadata_only(
     log = open_log(path)
     assert {"magic", "metadata"} <= {x.part for x in log.damage.losses}
     assert _messages(path).items() <= intact.messages.items()
+
+
+def test_a_repaired_copy_reads_clean_and_says_what_its_source_lost(
+    intact: Intact, tmp_path: Path
+) -> None:
+    chunk_data = intact.regions["chunk data"]
+    data = bytearray(intact.data)
+    data[chunk_data[len(chunk_data) // 3]] ^= 0x10
+    damaged = tmp_path / "damaged.mcap"
+    damaged.write_bytes(bytes(data))
+    report = repair(damaged, tmp_path / "fixed.mcap")
+    assert report.salvaged and len(report.damage) == 1 and "CRC mismatch" in report.damage[0]
+    fixed = open_log(tmp_path / "fixed.mcap")
+    assert not fixed.verify()
+    assert _messages(tmp_path / "fixed.mcap") == _messages(damaged)
+    assert fixed.metadata == META and fixed.attachments == ATTACH
+    row = summary_rows(summarize(fixed))["damage"]
+    assert row.startswith("none here; repaired from damaged.mcap, which lost: 1 chunk lost (t=")
+    with pytest.raises(RecordingError, match="exists"):
+        repair(damaged, tmp_path / "fixed.mcap")  # nothing is overwritten

@@ -13,6 +13,10 @@ from flowrun.recording.reader import open_log
 from flowrun.recording.schema import VEHICLES_TOPIC
 from flowrun.recording.writer import CHUNK_SIZE, PROFILE, media_type
 
+REPAIR_METADATA = "flowrun_repair"
+"""Metadata record of a repaired copy of a damaged log: ``source`` (file name), ``lost``
+(one line) and ``details`` (one line per damaged part)."""
+
 
 @dataclass(frozen=True)
 class RepairReport:
@@ -46,7 +50,7 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
 
     The copy is written to a ``.partial`` file beside ``out_path`` and renamed only when
     complete: an interrupted repair leaves no file under ``out_path``, and the input is only
-    read.
+    read. A copy of a damaged log holds a :data:`REPAIR_METADATA` record saying what was lost.
 
     Raises:
         RecordingError: the input is not a flowrun log, ``out_path`` exists (nothing is
@@ -90,9 +94,13 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
             messages += 1
             frames += channel.topic == VEHICLES_TOPIC
             end_ns = message.log_time if end_ns is None else max(end_ns, message.log_time)
+        log.check_data_section()
+        if log.damage:  # the copy reads as intact: it says what its source lost
+            lost = {"source": src.name, "lost": log.damage.short()}
+            lost["details"] = "\n".join(log.damage.describe())
+            writer.add_metadata(REPAIR_METADATA, lost, checksum=True)
         writer.finish()
         os.fsync(stream.fileno())
-    log.check_data_section()
     return RepairReport(
         in_path=src,
         out_path=dst,

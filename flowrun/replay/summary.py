@@ -11,6 +11,7 @@ import numpy as np
 
 from flowrun.recording import McapLog
 from flowrun.recording.frames import StepStats
+from flowrun.recording.repair import REPAIR_METADATA
 from flowrun.recording.writer import ROSTER_METADATA
 from flowrun.replay.analysis import SpeedSeries, speed_series
 
@@ -172,8 +173,21 @@ def summarize(
         arrived=arrived,
         outflow=arrived * 3600.0 / duration if duration > 0 else math.nan,
         open_network=meta.get("network_closed") == "false" or departed + arrived > 0,
-        damage=log.damage.short(),
+        damage=_damage(log),
     )
+
+
+def _damage(log: McapLog) -> str:
+    """What the log lost, or what the log it was repaired from lost."""
+    if log.damage:
+        return log.damage.short()
+    repaired = log.all_metadata.get(REPAIR_METADATA)
+    if repaired and repaired.get("lost"):
+        return (
+            f"none here; repaired from {repaired.get('source', '?')}, which lost: "
+            + repaired["lost"]
+        )
+    return ""
 
 
 def _num(x: float | None, unit: str = "", digits: int = 3) -> str:
