@@ -29,6 +29,7 @@ from flowrun.experiment.sweep import (
     plan_sweep,
     split_values,
 )
+from flowrun.recording.reader import open_log
 
 ROOT = Path(__file__).resolve().parent.parent
 SUGIYAMA = ROOT / "configs" / "sugiyama.yaml"
@@ -226,3 +227,35 @@ def test_an_interrupted_sweep_keeps_finished_points_and_the_same_command_finishe
     assert "already done: skipped" in done.stdout
     for name, state in states.items():  # what was there is still there, as it was
         assert read_status(folder / name).state == state
+
+
+@pytest.mark.sumo
+def test_points_of_a_killed_sweep_finish_their_logs_and_say_interrupted(tmp_path: Path) -> None:
+    cmd = [str(Path(sys.executable).parent / "flowrun"), "sweep", str(SUGIYAMA),
+           "--grid", "network.length=230,260", "--steps", "1000000", "--jobs", "2",
+           "--out", str(tmp_path)]  # fmt: skip
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while len(list(tmp_path.glob("sugiyama/sweep-*/*/run_0.mcap"))) < 2:
+            assert proc.poll() is None
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        time.sleep(random.Random(12).uniform(0.0, 0.5))
+        proc.kill()  # SIGKILL: the sweep cannot pass anything on; the kernel tells the points
+        proc.wait()
+        points = sorted(p for p in next(tmp_path.glob("sugiyama/sweep-*")).iterdir() if p.is_dir())
+        while any(read_status(p).state == "running" for p in points):
+            assert time.monotonic() < deadline, [read_status(p) for p in points]
+            time.sleep(0.05)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    for point in points:
+        status = read_status(point)
+        assert (status.state, status.exit_code) == ("interrupted", 143)
+        log = open_log(point / "run_0.mcap")
+        assert not log.salvaged
+        steps = [f.step for f in log.frames()]
+        assert steps == list(range(len(steps)))
