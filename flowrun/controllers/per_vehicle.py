@@ -165,8 +165,26 @@ class PerVehicleGroup(AccelerationController):
             out[i] = math.nan if a is None else a
         return out
 
+    def reset(self, num_vehicles: int) -> None:
+        """At an episode's start (``0``) forget every object; otherwise keep the objects of
+        the vehicles still there (:meth:`actions` drops the others)."""
+        if num_vehicles == 0:
+            self.vehicles.clear()
+
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         return np.full(inputs.size, np.nan)  # driven through :meth:`actions`, never here
+
+
+def bind_per_vehicle_groups(controls: Sequence[Any], vehicles: VehicleParams) -> None:
+    """Give each Flow-style group controller its vehicle type's car-following parameters.
+
+    Args:
+        controls: the groups' controls (``GroupControl``, one per ``vehicles.groups``).
+        vehicles: the experiment's vehicle groups.
+    """
+    for group, control in zip(vehicles.groups, controls, strict=True):
+        if isinstance(control.controller, PerVehicleGroup):
+            control.controller.bind(group.car_following_params)
 
 
 class FlowStyleDriver:

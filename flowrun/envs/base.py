@@ -25,7 +25,11 @@ import numpy as np
 
 from flowrun.config.params import EnvParams, SumoParams
 from flowrun.config.validate import check_params
-from flowrun.controllers.per_vehicle import FlowStyleDriver, PerVehicleGroup
+from flowrun.controllers.per_vehicle import (
+    FlowStyleDriver,
+    PerVehicleGroup,
+    bind_per_vehicle_groups,
+)
 from flowrun.envs.frames import StepRecord, complete_frames, step_record
 from flowrun.envs.render import render_ring
 from flowrun.envs.vehicles import (
@@ -40,6 +44,7 @@ from flowrun.kernel.geometry import RingPlacement
 from flowrun.kernel.network import NetworkKernel
 from flowrun.kernel.sumo import gui_available
 from flowrun.networks.base import Network
+from flowrun.utils.spaces import ActionClipper
 
 log = logging.getLogger(__name__)
 
@@ -126,9 +131,7 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         self.k = Kernel(sim_params, self.work_dir, gui=gui)
         self.k.network = NetworkKernel(network.spec, network=network)  # Flow: before reset
         self.controls: list[GroupControl] = build_controllers(network.vehicles)
-        for group, control in zip(network.vehicles.groups, self.controls, strict=True):
-            if isinstance(control.controller, PerVehicleGroup):  # Flow-style get_accel(env)
-                control.controller.bind(group.car_following_params)
+        bind_per_vehicle_groups(self.controls, network.vehicles)  # Flow-style get_accel(env)
         self._flow_style = FlowStyleDriver(network.vehicles)
         self.step_counter = 0
         self.time_counter = 0
@@ -143,8 +146,7 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         self._closed = False
         self._space_cache: tuple[gymnasium.Space[Any], gymnasium.Space[Any]] | None = None
         self._placement: RingPlacement | None = None
-        self._bounds: tuple[np.ndarray, np.ndarray] | tuple[()] | None = None
-        self._clip_tuple = False
+        self._clipper: ActionClipper | None = None
         #: RL cars waiting for a controlled place (Flow's ``rl_queue``) and the controlled
         #: ones in arrival order (Flow's ``rl_veh``); see :meth:`update_rl_queue`
         self.rl_queue: deque[str] = deque()
@@ -242,8 +244,6 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
             control.version = -1
             control.index = np.zeros(0, dtype=np.int64)
             control.controller.reset(0)
-            if isinstance(control.controller, PerVehicleGroup):
-                control.controller.vehicles.clear()
         self._flow_style.clear()
         self.step_counter = 0
         self.time_counter = 0
@@ -344,29 +344,9 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
     def clip_actions(self, rl_actions: Any) -> Any:
         """Clip a Box action (or each Box part of a Tuple action) to the action space when
         ``env_params.clip_actions``."""
-        if self._bounds is None and isinstance(self._spaces()[0], gymnasium.spaces.Tuple):
-            self._bounds = ()
-            self._clip_tuple = self.env_params.clip_actions
-        if self._clip_tuple:
-            space = self._spaces()[0]
-            assert isinstance(space, gymnasium.spaces.Tuple)
-            return tuple(
-                np.clip(np.asarray(a, dtype=np.float64), sub.low, sub.high)
-                if isinstance(sub, gymnasium.spaces.Box)
-                else a
-                for a, sub in zip(rl_actions, space.spaces, strict=True)
-            )
-        if self._bounds is None:
-            space = self._spaces()[0]
-            self._bounds = (
-                (np.asarray(space.low, np.float64), np.asarray(space.high, np.float64))
-                if self.env_params.clip_actions and isinstance(space, gymnasium.spaces.Box)
-                else ()
-            )
-        if not self._bounds:
-            return rl_actions
-        low, high = self._bounds
-        return np.minimum(np.maximum(np.asarray(rl_actions, dtype=np.float64), low), high)
+        if self._clipper is None:
+            self._clipper = ActionClipper(self.env_params.clip_actions)
+        return self._clipper.clip(self._spaces()[0], rl_actions)
 
     def _format_obs(self, obs: Any) -> Any:
         space = self._spaces()[1]
