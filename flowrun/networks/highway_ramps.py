@@ -15,9 +15,9 @@ probability ``next_off_ramp_proba`` (so a route's probability is the product of 
 choices); cars start on ``highway_0`` or an on-ramp (flowrun adds the same choices for the
 other highway edges, so cars may be placed anywhere at the start).
 
-Positions along the network: highway edges start at their node's x plus the links through
-the junctions before them (an allowance of :data:`LINK_ALLOWANCE` m each, at least as long
-as SUMO's, so positions never run backwards); the ramps follow the highway's end.
+Positions along the network: highway edges start where the one before ends plus the link
+through the junction between (:func:`through_link`), so positions run on as the cars drive;
+the ramps follow the highway's end.
 """
 
 from __future__ import annotations
@@ -59,8 +59,15 @@ KINDS = {"highway_length": "positive", "on_ramps_length": "positive",
 
 #: Flow's junction radius of the highway nodes, m
 RADIUS = 10.0
-#: length allowed for the link through a highway node when placing edges along the line, m
-LINK_ALLOWANCE = 25.0
+#: SUMO's default lane width, m
+LANE_WIDTH = 3.2
+
+
+def through_link(ramp_lanes: int, angle: float) -> float:
+    """Length of the highway's link through a node where a ramp of ``ramp_lanes`` lanes
+    meets it at ``angle`` (rad), m: the junction's two radii plus the ramp's width along the
+    road (how netconvert 1.28 shapes it; checked against the built network in the tests)."""
+    return 2 * RADIUS + LANE_WIDTH * ramp_lanes / max(abs(math.sin(angle)), 1e-3)
 
 
 def check_ramps(p: dict[str, Any]) -> tuple[list[float], list[float]]:
@@ -152,10 +159,15 @@ def highway_ramps_spec(p: dict[str, Any]) -> NetworkSpec:
             edges.append(Edge(rid, *ends, ramp_len, lanes, speed))
             ramp_at[index[x]] = rid
     choices = ramp_routes(len(xs) - 1, ramp_at, float(p["next_off_ramp_proba"]))
-    starts = {f"highway_{i}": x + i * LINK_ALLOWANCE for i, x in enumerate(xs[:-1])}
-    end = length + (len(xs) - 2) * LINK_ALLOWANCE
-    for e in edges[len(xs) - 1 :]:
-        starts[e.id] = end + LINK_ALLOWANCE
+    link = {index[x]: through_link(int(p[f"{kind}_ramps_lanes"]), float(p[f"angle_{kind}_ramps"]))
+            for kind, positions in (("on", on), ("off", off)) for x in positions}  # fmt: skip
+    starts, end = {}, 0.0
+    for i, e in enumerate(edges[: len(xs) - 1]):
+        end += link.get(i, 0.0)
+        starts[e.id] = end
+        end += e.length
+    for e in edges[len(xs) - 1 :]:  # the ramps after the highway's end
+        starts[e.id] = end + 2 * RADIUS
         end = starts[e.id] + e.length
     main = tuple(f"highway_{i}" for i in range(len(xs) - 1))
     return NetworkSpec(
