@@ -52,12 +52,14 @@ PLAIN_LINK = 0.1
 #: length of the links through a zipper node by the number of lanes that merge there, m
 #: (SUMO 1.28 builds every lane's link through it this long; measured, see the tests)
 ZIPPER_LINKS: dict[int, float] = {2: 40.063898, 4: 40.216003, 6: 40.489036, 8: 40.896360,
-                                  12: 41.966878}  # fmt: skip
+                                  10: 41.388543, 12: 41.966878, 16: 43.379084,
+                                  20: 45.090679}  # fmt: skip
 
 
 def zipper_link(lanes_in: int) -> float:
     """Length of the links through a zipper node that ``lanes_in`` lanes enter, m: measured
-    up to 12 lanes, beyond that an upper bound (positions then skip a little, never overlap)."""
+    up to 20 lanes (scaling 5), beyond that an upper bound (positions then skip a little,
+    never overlap)."""
     return ZIPPER_LINKS.get(lanes_in, 40.0 + 0.02 * lanes_in**2)
 
 
