@@ -54,8 +54,8 @@ class BottleneckAccelEnv(BottleneckEnv):
         #: the AVs' ids, fixed for the env's life (Flow's ``rl_id_list``)
         self.rl_id_list = [
             f"{g.veh_id}_{i}"
-            for g in vehicles.groups
-            if g.acceleration_controller.type == "RLController"
+            for g, control in zip(vehicles.groups, self.controls, strict=True)
+            if control.controller.is_rl
             for i in range(g.num_vehicles)
         ]
         self.num_rl = len(self.rl_id_list)
