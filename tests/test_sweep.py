@@ -29,6 +29,7 @@ from flowrun.experiment.sweep import (
     plan_sweep,
     split_values,
 )
+from flowrun.experiment.sweep_report import plot_metric, write_tables
 from flowrun.recording.reader import open_log
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -138,6 +139,27 @@ def test_the_same_sweep_cannot_run_twice_at_once(tmp_path: Path) -> None:
     assert result.exit_code == 1
     assert f"already running (pid {os.getpid()})" in result.stderr
     assert [p.name for p in plan.folder.iterdir()] == [".lock"]  # no point started
+
+
+def test_tables_hold_every_point_and_the_mean_over_seeds(tmp_path: Path) -> None:
+    plan = plan_sweep(load_config(SUGIYAMA), parse_grid(["network.length=230,260"]), 2, tmp_path)
+    plan.folder.mkdir(parents=True)
+    speeds = {("230", 0): 2.0, ("230", 1): 3.0, ("260", 0): 4.0}  # 260/seed 1 was interrupted
+    rows = []
+    for point in plan.points:
+        key = (point.values[0][1], point.seed)
+        row = {"network.length": key[0], "seed": point.seed,
+               "status": "complete" if key in speeds else "interrupted"}  # fmt: skip
+        if key in speeds:
+            row["mean_speed"] = speeds[key]
+        rows.append(row)
+    csv_path, md_path = write_tables(plan, rows, "mean_speed")
+    assert [r["mean_speed"] for r in read_csv(csv_path)] == ["2.0", "3.0", "4.0", ""]
+    md = md_path.read_text()
+    assert "| 260 | 1 | interrupted |" in md
+    assert "| 230 | 2/2 | 2.5 +- 0.5 |" in md
+    assert "| 260 | 1/2 | 4 +- 0 |" in md
+    assert plot_metric(plan, rows, "mean_speed").read_bytes()[:4] == b"\x89PNG"
 
 
 # --- real sweeps -------------------------------------------------------------------------------

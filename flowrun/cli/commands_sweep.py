@@ -294,11 +294,12 @@ def _run_sweep(
 def _report(plan: SweepPlan, metric: str) -> None:
     """Tables and plot of the finished points, printed and written to the sweep folder."""
     from flowrun.experiment import sweep as sw
+    from flowrun.experiment import sweep_report
 
     rows = sw.collect(plan)
     try:
-        csv_path, md_path = sw.write_tables(plan, rows, metric)
-        plot = sw.plot_metric(plan, rows, metric)
+        csv_path, md_path = sweep_report.write_tables(plan, rows, metric)
+        plot = sweep_report.plot_metric(plan, rows, metric)
     except OSError as err:
         raise FlowrunError(f"cannot write sweep results in {plan.folder}: {err.strerror}") from None
     console.print(results_table(plan, rows, metric))
