@@ -23,6 +23,7 @@ from flowrun.config.model import ExperimentConfig, TrainConfig
 from flowrun.envs.factory import env_class
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.experiment.rundir import create_run_dir
+from flowrun.fastring.plan import check_numpy_backend
 from flowrun.training.algorithms import algorithm_class, build_hyperparams
 from flowrun.training.callbacks import (
     StopRequested,
@@ -137,6 +138,7 @@ def train(
     cls = algorithm_class(tc.algorithm)
     build_hyperparams(tc.algorithm, tc.hyperparams)  # report a typo before any work
     env_class(cfg)  # a wrong env.class or missing additional_params, also before any work
+    check_numpy_backend(cfg)  # sim.backend numpy: a config it cannot run, before any work
     state: dict[str, Any] | None = None
     if resume_dir is not None:
         run_dir = resume_dir
