@@ -123,3 +123,20 @@ def test_lane_changes_get_the_same_step_whether_asked_every_step_or_not() -> Non
     asked = stamps(True)
     assert asked and all(1 <= s <= 200 for s in asked.values())
     assert stamps(False) == asked
+
+
+def test_partially_observed_env_sees_each_rl_cars_neighbours_on_every_lane() -> None:
+    with highway("env.class=LaneChangeAccelPOEnv", "env.horizon=100") as env:
+        assert env.observation_space.shape == (4 * 4 * 4 + 4,)  # 4 AVs, 4 lanes
+        check_env(env, skip_render_check=True)
+        obs, _ = env.reset(seed=0)
+        for _ in range(50):
+            obs = env.step(np.tile([1.0, 0.0], 4).astype(np.float32))[0]
+        vk, net = env.k.vehicle, env.k.network
+        rl = next(v for v in env.sorted_ids if v in vk.get_rl_ids())
+        lane = vk.get_lane(rl)
+        ahead = obs[:4]  # the first AV's gaps ahead on lanes 0-3
+        expected = vk.get_headway(rl) / net.length() if vk.get_leader(rl) else 1.0
+        assert ahead[lane] == pytest.approx(min(expected, 1.0), rel=1e-5)
+        assert obs[64] == pytest.approx(vk.get_speed(rl) / net.max_speed(), rel=1e-5)
+        assert set(env.visible) <= set(vk.get_ids()) and env.visible

@@ -7,7 +7,7 @@ from flowrun.envs.bottleneck_velocity import BottleneckDesiredVelocityEnv, Desir
 from flowrun.envs.merge import MergePOEnv
 from flowrun.envs.registry import env_names, register_envs, resolve_env_class
 from flowrun.envs.ring.accel import AccelEnv
-from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
+from flowrun.envs.ring.lane_change import LaneChangeAccelEnv, LaneChangeAccelPOEnv
 from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
 from flowrun.envs.test import TestEnv
 from flowrun.envs.traffic_light_grid import (
@@ -26,6 +26,7 @@ __all__ = [
     "DesiredVelocityEnv",
     "Env",
     "LaneChangeAccelEnv",
+    "LaneChangeAccelPOEnv",
     "MergePOEnv",
     "TestEnv",
     "TrafficLightGridBenchmarkEnv",

@@ -22,7 +22,7 @@ def _builtin() -> dict[str, type]:
     from flowrun.envs.bottleneck_velocity import BottleneckDesiredVelocityEnv
     from flowrun.envs.merge import MergePOEnv
     from flowrun.envs.ring.accel import AccelEnv
-    from flowrun.envs.ring.lane_change import LaneChangeAccelEnv
+    from flowrun.envs.ring.lane_change import LaneChangeAccelEnv, LaneChangeAccelPOEnv
     from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
     from flowrun.envs.test import TestEnv
     from flowrun.envs.traffic_light_grid import (
@@ -39,6 +39,7 @@ def _builtin() -> dict[str, type]:
             WaveAttenuationEnv,
             WaveAttenuationPOEnv,
             LaneChangeAccelEnv,
+            LaneChangeAccelPOEnv,
             MergePOEnv,
             BottleneckEnv,
             BottleneckAccelEnv,

@@ -115,3 +115,59 @@ class LaneChangeAccelEnv(AccelEnv):
         blocked = [self.time_counter <= wait + vk.get_last_lc(v) for v in rl_ids]
         vk.apply_acceleration(rl_ids, accel[:n])
         vk.apply_lane_change(rl_ids, np.where(blocked, 0.0, direction[:n]))
+
+
+class LaneChangeAccelPOEnv(LaneChangeAccelEnv):
+    """The partially observed version (Flow's ``LaneChangeAccelPOEnv``): each RL car sees
+    only its neighbours on every lane of its edge.
+
+    Observation: per RL car (the ``num_rl_vehicles`` placed at the start, present ones in
+    :attr:`sorted_ids` order, zeros for missing ones), over the network's largest number of
+    lanes: gaps to the nearest car ahead, gaps to the nearest car behind (both / network
+    length; 1 with none), their speeds (/ max speed; 0 with none); then every RL car's own
+    speed / max speed. All in [0, 1] (Flow divides only some of these and appends raw
+    speeds; flowrun normalises all). Actions and reward as :class:`LaneChangeAccelEnv`.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        net = self.k.network
+        #: the largest number of lanes of any edge (Flow's ``num_lanes``)
+        self.num_lanes = max(net.num_lanes(e) for e in net.get_edge_list())
+        #: the neighbours observed at the last step (Flow's ``visible``)
+        self.visible: list[str] = []
+
+    @property
+    def observation_space(self) -> Box:  # type: ignore[override]
+        """``4 * num_lanes`` neighbour values per RL car, then the RL cars' speeds."""
+        n = self.initial_vehicles.num_rl_vehicles
+        return Box(low=0.0, high=1.0, shape=(4 * n * self.num_lanes + n,), dtype=np.float32)
+
+    def get_state(self) -> Any:
+        """Neighbours on every lane of each RL car, and the RL cars' speeds."""
+        vk, net = self.k.vehicle, self.k.network
+        length, v_max, lanes = net.length(), net.max_speed(), self.num_lanes
+        n = self.initial_vehicles.num_rl_vehicles
+        near = np.zeros((n, 4, lanes))
+        near[:, :2] = 1.0  # no car ahead / behind: the largest gap
+        speed = np.zeros(n)
+        self.visible = []
+        rl_ids = [v for v in self.sorted_ids if v in set(vk.get_rl_ids())][:n]
+        for i, rl in enumerate(rl_ids):
+            ahead, behind = vk.get_lane_headways(rl), vk.get_lane_tailways(rl)
+            m = min(len(ahead), lanes)
+            near[i, 0, :m] = np.asarray(ahead[:m]) / length
+            near[i, 1, :m] = np.asarray(behind[:m]) / length
+            near[i, 2, :m] = np.asarray(vk.get_lane_leaders_speed(rl)[:m]) / v_max
+            near[i, 3, :m] = np.asarray(vk.get_lane_followers_speed(rl)[:m]) / v_max
+            speed[i] = vk.get_speed(rl) / v_max
+            self.visible += [v for v in vk.get_lane_leaders(rl) + vk.get_lane_followers(rl) if v]
+        obs = np.concatenate([near.reshape(-1), speed])
+        return clip_unit(np.nan_to_num(obs, posinf=1.0))
+
+    def additional_command(self) -> None:
+        """Flow's: mark the neighbours the RL cars see as observed."""
+        super().additional_command()
+        for veh_id in self.visible:
+            if veh_id in self.k.vehicle.table:
+                self.k.vehicle.set_observed(veh_id)
