@@ -26,6 +26,7 @@ BUILTIN = [
     "BottleneckEnv",
     "DesiredVelocityEnv",
     "LaneChangeAccelEnv",
+    "LaneChangeAccelPOEnv",
     "MergePOEnv",
     "TestEnv",
     "TrafficLightGridBenchmarkEnv",
