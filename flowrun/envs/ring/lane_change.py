@@ -152,7 +152,8 @@ class LaneChangeAccelPOEnv(LaneChangeAccelEnv):
         near[:, :2] = 1.0  # no car ahead / behind: the largest gap
         speed = np.zeros(n)
         self.visible = []
-        rl_ids = [v for v in self.sorted_ids if v in set(vk.get_rl_ids())][:n]
+        rl_set = set(vk.get_rl_ids())
+        rl_ids = [v for v in self.sorted_ids if v in rl_set][:n]
         for i, rl in enumerate(rl_ids):
             ahead, behind = vk.get_lane_headways(rl), vk.get_lane_tailways(rl)
             m = min(len(ahead), lanes)
