@@ -9,8 +9,6 @@ fails), which callers turn into a :class:`~flowrun.recording.damage.Loss`.
 
 from __future__ import annotations
 
-import io
-import os
 import struct
 import zlib
 from dataclasses import dataclass, field
@@ -129,14 +127,9 @@ class ChunkRef:
 
 
 def read_at(f: IO[bytes], offset: int, n: int) -> bytes:
-    """``n`` bytes at ``offset`` (fewer at the end of the file); ``os.pread`` where there is
-    a file descriptor, so threads may share ``f``."""
-    try:
-        fd = f.fileno()
-    except (AttributeError, OSError, io.UnsupportedOperation):
-        f.seek(offset)
-        return f.read(n)
-    return os.pread(fd, n, offset)
+    """``n`` bytes at ``offset`` (fewer at the end of the file)."""
+    f.seek(offset)
+    return f.read(n)
 
 
 # -- records -------------------------------------------------------------------------------

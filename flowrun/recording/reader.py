@@ -302,14 +302,20 @@ class McapLog:
                 )
             )
         ]
-        # One worker reads, decompresses and CRC-checks the next chunk while this one's
-        # messages are used (zstd and zlib release the GIL); nothing leaves unchecked.
-        with open(self.path, "rb") as f, ThreadPoolExecutor(1) as pool:
-            pending = pool.submit(self._load, f, refs[0]) if refs else None
+        # One worker reads (with its own file handle), decompresses and CRC-checks the next
+        # chunk while this one's messages are used (zstd and zlib release the GIL); nothing
+        # leaves unchecked.
+        with (
+            open(self.path, "rb") as f,
+            open(self.path, "rb") as worker_f,
+            ThreadPoolExecutor(1) as pool,
+        ):
+            pending = pool.submit(self._load, worker_f, refs[0]) if refs else None
             for i, ref in enumerate(refs):
                 assert pending is not None
                 loaded = pending.result()
-                pending = pool.submit(self._load, f, refs[i + 1]) if i + 1 < len(refs) else None
+                if i + 1 < len(refs):
+                    pending = pool.submit(self._load, worker_f, refs[i + 1])
                 chunk = self._settle(f, ref, loaded)
                 if chunk is None:
                     continue
