@@ -154,3 +154,11 @@ def test_commands_that_run_on_sumo_only_refuse_a_numpy_config() -> None:
     with pytest.raises(ConfigError, match="flowrun baseline runs on SUMO only"):
         refuse_numpy_backend(wave(), "flowrun baseline")
     refuse_numpy_backend(load("ring_wave"), "flowrun baseline")  # SUMO configs pass
+
+
+def test_train_refuses_before_making_a_run_folder(tmp_path: Path) -> None:
+    from flowrun.training.trainer import train
+
+    with pytest.raises(ConfigError, match="single-lane"):
+        train(wave("network.lanes=2"), out=tmp_path)
+    assert not any(tmp_path.iterdir())
