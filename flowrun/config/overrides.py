@@ -62,8 +62,11 @@ def parse_override(text: str) -> tuple[KeyPath, Any]:
     try:
         value = load_scalar(raw)
     except yaml.YAMLError as err:
+        problem = getattr(err, "problem", None) or getattr(err, "context", None) or "invalid"
         raise ConfigError(
-            f"cannot read the value '{raw}' as YAML: {err}", format_path(path), OVERRIDE_LOCATION
+            f"cannot read the value {raw!r} as YAML ({problem}); quote it or fix the brackets",
+            format_path(path),
+            OVERRIDE_LOCATION,
         ) from None
     return path, value
 
