@@ -9,7 +9,7 @@ import os
 import resource
 import subprocess
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import replace
 from datetime import UTC, datetime, timedelta
@@ -224,24 +224,39 @@ class BreakingEnv(AccelEnv):
 '''
 
 
-def user_env_config(tmp_path: Path, cls: str) -> Path:
-    (tmp_path / "broken_envs.py").write_text(ENVS)
-    config = tmp_path / f"{cls}.yaml"
-    config.write_text(
-        SUGIYAMA.read_text().replace("class: AccelEnv", f"class: broken_envs:{cls}")
-    )
-    return config
+#: The user's module (a name no other test uses: imported modules stay in ``sys.modules``).
+ENV_MODULE = "runs_files_user_envs"
 
 
-def test_a_run_failing_before_it_wrote_anything_leaves_no_folder(tmp_path: Path) -> None:
-    config = user_env_config(tmp_path, "RefusingEnv")
+@pytest.fixture
+def user_env_config(tmp_path: Path) -> Iterator[Callable[[str], Path]]:
+    """Writes the user's module and a config naming one of its classes; forgets the module."""
+
+    def make(cls: str) -> Path:
+        (tmp_path / f"{ENV_MODULE}.py").write_text(ENVS)
+        config = tmp_path / f"{cls}.yaml"
+        config.write_text(
+            SUGIYAMA.read_text().replace("class: AccelEnv", f"class: {ENV_MODULE}:{cls}")
+        )
+        return config
+
+    yield make
+    sys.modules.pop(ENV_MODULE, None)
+
+
+def test_a_run_failing_before_it_wrote_anything_leaves_no_folder(
+    tmp_path: Path, user_env_config: Callable[[str], Path]
+) -> None:
+    config = user_env_config("RefusingEnv")
     result = CliRunner().invoke(app, ["baseline", str(config), "--out", str(tmp_path / "runs")])
     one_line_error(result, "RefusingEnv refuses")
     assert list((tmp_path / "runs").rglob("*")) == []
 
 
-def test_a_run_failing_midway_keeps_its_log_and_says_failed(tmp_path: Path) -> None:
-    config = user_env_config(tmp_path, "BreakingEnv")
+def test_a_run_failing_midway_keeps_its_log_and_says_failed(
+    tmp_path: Path, user_env_config: Callable[[str], Path]
+) -> None:
+    config = user_env_config("BreakingEnv")
     out = tmp_path / "runs"
     result = CliRunner().invoke(app, ["baseline", str(config), "--out", str(out)])
     one_line_error(result, "broke at step 30")
