@@ -34,6 +34,12 @@ class ConfigError(FlowrunError):
         return f"{where}: {self.message}" if where else self.message
 
 
+class CountMismatchError(ConfigError, AssertionError):
+    """Counts that must agree do not, e.g. ``InitialConfig.edges_distribution``'s per-edge
+    counts and the number of vehicles. Also an ``AssertionError``, which is what Flow raises
+    for it, so Flow code catching that keeps working."""
+
+
 class FatalFlowError(FlowrunError):
     """An error after which the simulation cannot continue (Flow's ``FatalFlowError``, also
     importable from ``flowrun.utils.exceptions``).

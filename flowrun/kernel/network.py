@@ -30,9 +30,9 @@ class NetworkKernel:
         self.network = network
         self._edges = {e.id: e for e in spec.edges}
         self._edge_starts = dict(spec.edge_starts if lanes is None else lanes.edge_starts)
-        self._starts = sorted(
-            (s, e) for e, s in self._edge_starts.items() if not e.startswith(":")
-        )
+        # every edge, junction links included (Flow's get_edge finds positions on them too)
+        self._starts = sorted((s, e) for e, s in self._edge_starts.items())
+        self._flow_names = flow_internal_names(network, self._edge_starts)
         self._max_speed = max((e.speed for e in spec.edges), default=0.0)
         self._length = spec.length + self._internal_length()
 
@@ -161,13 +161,16 @@ class NetworkKernel:
         return start + position
 
     def get_edge(self, x: float) -> tuple[str, float]:
-        """Edge and position on it of network position ``x`` (wrapped on closed networks)."""
+        """Edge and position on it of network position ``x`` (wrapped on closed networks),
+        as Flow: the last edge starting at or before ``x``, junction links included. A
+        junction link the network names Flow's way (``":bottom"`` for SUMO's
+        ``":bottom_0"``, see :func:`flow_internal_names`) is given by that name."""
         if self.spec.closed:
-            x = x % self.spec.length
+            x = x % self.length()
         keys = [s for s, _ in self._starts]
         i = max(bisect.bisect_right(keys, x) - 1, 0)
         start, edge = self._starts[i]
-        return edge, x - start
+        return self._flow_names.get(edge, edge), x - start
 
     @property
     def rts(self) -> dict[str, list[tuple[list[str], float]]]:
@@ -180,3 +183,23 @@ class NetworkKernel:
     def total_edgestarts_dict(self) -> dict[str, float]:
         """Start position of every edge (Flow's name)."""
         return dict(self._edge_starts)
+
+
+def flow_internal_names(network: Any, edge_starts: dict[str, float]) -> dict[str, str]:
+    """SUMO id -> Flow's name of the junction links a network names without the lane index.
+
+    Flow's networks list some junction links by junction (``specify_internal_edge_starts``
+    gives ``":bottom"`` where SUMO's edge is ``":bottom_0"``); ``FLOW_INTERNAL_NAMES`` of a
+    flowrun network says the same. Names that are SUMO ids already map to nothing.
+    """
+    names: dict[str, str] = dict(getattr(network, "FLOW_INTERNAL_NAMES", None) or {})
+    hook = getattr(network, "specify_internal_edge_starts", None)
+    try:
+        declared = list(hook() or ()) if callable(hook) else []
+    except Exception:  # a user's hook that needs more than the network: no aliases
+        declared = []
+    for name, _ in declared:
+        name = str(name)
+        if name not in edge_starts and f"{name}_0" in edge_starts:
+            names[f"{name}_0"] = name
+    return {sumo: flow for sumo, flow in names.items() if sumo in edge_starts}

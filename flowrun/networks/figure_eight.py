@@ -133,6 +133,12 @@ class FigureEightNetwork(Network):
     ADDITIONAL_NET_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_NET_PARAMS
     network_type: ClassVar[str] = "figure_eight"
 
+    #: Flow's names of the ring-end junction links (its ``specify_internal_edge_starts``),
+    #: which ``k.network.get_edge`` answers with
+    FLOW_INTERNAL_NAMES: ClassVar[dict[str, str]] = {
+        f":{end}_0": f":{end}" for end in ("bottom", "top", "right", "left")
+    }
+
     @classmethod
     def resolve_params(cls, given: dict[str, Any]) -> dict[str, Any]:
         """Merge with defaults and check each value."""

@@ -13,6 +13,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 from flowrun.errors import ConfigError
@@ -32,7 +33,7 @@ def spec_from_hooks(network: Any) -> NetworkSpec:
     edge_ids = {e.id for e in edges}
     connections = _connections(network.specify_connections(net_params), edge_ids, name)
     routes, choices = parse_routes(
-        network.specify_routes(net_params) or {}, edge_ids, None, f"{name}.specify_routes"
+        _routes_or_default(network, edges), edge_ids, None, f"{name}.specify_routes"
     )
     starts = dict(network.specify_edge_starts() or ())
     if not starts:  # Flow's default: edges laid end to end in the order given
@@ -51,6 +52,49 @@ def spec_from_hooks(network: Any) -> NetworkSpec:
         route_choices=choices,
         internal_links=True,
     )
+
+
+def _routes_or_default(network: Any, edges: Sequence[Edge]) -> Mapping[str, Any]:
+    """``specify_routes``'s answer; Flow's default when it gives none: one route per edge,
+    that edge alone (``{edge: [edge]}``)."""
+    given = network.specify_routes(network.net_params)
+    return given if given else {e.id: [e.id] for e in edges}
+
+
+def overlay_hooks(network: Any, spec: NetworkSpec, base: type) -> NetworkSpec:
+    """``spec`` (a built-in network's road) with the answers of the Flow hooks that a user's
+    subclass of that network overrides, as in Flow, where a subclass of ``RingNetwork``
+    may redefine only ``specify_edges`` or ``specify_routes``.
+
+    Args:
+        network: the network object.
+        spec: the built-in network's spec.
+        base: the built-in network class whose own hooks do not count as overridden.
+    """
+    cls = type(network)
+
+    def overridden(name: str) -> bool:
+        return getattr(cls, name) is not getattr(base, name)
+
+    if not (overridden("specify_edges") or overridden("specify_routes")):
+        return spec
+    name = cls.__name__
+    edges = spec.edges
+    if overridden("specify_edges"):
+        net_params = network.net_params
+        types = {t["id"]: t for t in network.specify_types(net_params) or ()}
+        node_xy = {n.id: (n.x, n.y) for n in spec.nodes}
+        edges = tuple(
+            _edge(e, types, node_xy, name) for e in network.specify_edges(net_params) or ()
+        )
+    routes, choices = parse_routes(
+        _routes_or_default(network, edges) if overridden("specify_routes") else spec.routes,
+        {e.id for e in edges}, None, f"{name}.specify_routes",
+    )  # fmt: skip
+    return replace(
+        spec, edges=edges, routes=routes, route_choices=choices,
+        length=float(sum(e.length for e in edges)),
+    )  # fmt: skip
 
 
 def _node(n: Mapping[str, Any], owner: str) -> Node:

@@ -109,11 +109,15 @@ class RingNetwork(Network):
         return params
 
     def build_spec(self) -> NetworkSpec:
-        """The ring's nodes, edges and routes."""
+        """The ring's nodes, edges and routes (a subclass's own ``specify_edges`` /
+        ``specify_routes`` replace the ring's, as in Flow)."""
+        from flowrun.networks.flow_hooks import overlay_hooks
+
         p = self.params
-        return ring_spec(
+        spec = ring_spec(
             float(p["length"]), int(p["lanes"]), float(p["speed_limit"]), int(p["resolution"])
         )
+        return overlay_hooks(self, spec, RingNetwork)
 
     def start_positions(self, rng: np.random.Generator) -> StartPositions:
         """Flow's initial placement on the ring (see :func:`place_on_closed_road`).
@@ -123,7 +127,8 @@ class RingNetwork(Network):
         placement over open networks); a negative ``bunching`` counts as 0, as in Flow.
         """
         initial = self.initial_config
-        if initial.spacing == "custom" or initial.edges_distribution != "all":
+        own_edges = type(self).specify_edges is not RingNetwork.specify_edges
+        if initial.spacing == "custom" or initial.edges_distribution != "all" or own_edges:
             return super().start_positions(rng)
         if initial.spacing not in SPACINGS:
             raise ConfigError(
