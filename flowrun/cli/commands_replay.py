@@ -200,15 +200,22 @@ def register(app: typer.Typer) -> None:
             typer.Option("--out", help="Folder for plots (default: <log folder>/replay)."),
         ] = None,
         csv: Annotated[
-            Path | None, typer.Option("--csv", help="Export Flow emission-style CSV here.")
+            Path | None,
+            typer.Option("--csv", help="Export Flow emission-style CSV to this new file."),
         ] = None,
         repair_: Annotated[
             bool,
-            typer.Option("--repair", help="Write a clean copy of a damaged log: --repair IN OUT."),
+            typer.Option(
+                "--repair",
+                help="Write a clean, indexed copy of what a damaged log still holds: "
+                "--repair IN OUT (OUT must not exist; IN is only read).",
+            ),
         ] = False,
         foxglove: Annotated[
             Path | None,
-            typer.Option("--foxglove", help="Write the selected steps/vehicles to a new MCAP."),
+            typer.Option(
+                "--foxglove", help="Write the selected steps/vehicles to a new MCAP file."
+            ),
         ] = None,
     ) -> None:
         """Summarise a run's MCAP log (or compare two); plot it, export CSV, repair it."""
