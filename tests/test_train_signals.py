@@ -18,6 +18,7 @@ from pathlib import Path
 
 import pytest
 
+from flowrun.experiment.rundir import read_status
 from flowrun.recording.reader import open_log
 from flowrun.training.runstate import run_state
 
@@ -99,6 +100,8 @@ def test_ctrl_c_and_sigterm_save_a_checkpoint_and_resume_continues_the_step_coun
     metrics = json.loads((run / "metrics.json").read_text())
     assert metrics["status"] == "interrupted"
     assert run_state(run) == "interrupted"
+    shared = read_status(run)  # status.json, as every command writes it
+    assert (shared.state, shared.exit_code) == ("interrupted", code)
     state = json.loads((run / "checkpoints" / "state.json").read_text())
     assert state["timesteps"] == metrics["timesteps"]
     assert (run / "checkpoints" / state["model"]).is_file()
@@ -125,6 +128,7 @@ def test_sigkill_leaves_a_cut_run_that_resumes_and_eval_names_it(tmp_path: Path)
     assert returncode == -signal.SIGKILL
     assert _status(run / "metrics.json") == "running"  # written at the start, never finished
     assert run_state(run) == "cut"
+    assert read_status(run).state == "cut"
     state = json.loads((run / "checkpoints" / "state.json").read_text())
     assert not list((run / "checkpoints").glob("*.tmp.zip")) or state["model"]
 
@@ -177,6 +181,7 @@ def test_signals_during_eval_leave_readable_logs_and_say_so(
     assert ev.name.endswith(f"-{seed}")
     status = _status(ev / "metrics.json")
     assert status == ("running" if sig == signal.SIGKILL else "interrupted")
+    assert read_status(ev).state == ("cut" if sig == signal.SIGKILL else "interrupted")
     logs = sorted(ev.glob("*.mcap"))
     assert logs
     for path in logs:  # finished (all but the last complete), or salvaged up to the kill

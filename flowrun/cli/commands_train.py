@@ -33,35 +33,13 @@ from flowrun.cli.common import guarded
 
 if TYPE_CHECKING:
     from flowrun.experiment.metrics import RunMetrics
+    from flowrun.training.runstate import StopRequest
 
 RunDirArg = Annotated[Path, typer.Argument(help="A train run folder.", show_default=False)]
 EvalOutOpt = Annotated[
     Path | None,
     typer.Option("--out", help="Folder for evaluation folders [default: RUN_DIR/eval]."),
 ]
-
-
-class StopRequest:
-    """Ctrl-C/SIGTERM seen by :func:`stop_on_signals`: the first asks to stop at the next
-    step boundary (a checkpoint, finished logs), a second one stops at once."""
-
-    def __init__(self) -> None:
-        """No signal yet."""
-        self.signum: int | None = None
-
-    def __call__(self) -> bool:
-        """Whether a stop was asked."""
-        return self.signum is not None
-
-    def check(self) -> None:
-        """Raise ``KeyboardInterrupt`` once a stop was asked (call between steps)."""
-        if self.signum is not None:
-            raise KeyboardInterrupt
-
-    @property
-    def exit_code(self) -> int:
-        """128 + the signal: 130 for Ctrl-C (SIGINT), 143 for SIGTERM."""
-        return 128 + (self.signum if self.signum is not None else signal.SIGINT)
 
 
 @contextmanager
@@ -71,12 +49,12 @@ def stop_on_signals() -> Iterator[StopRequest]:
     Nothing is raised from inside the handler for the first signal: an exception there could
     land anywhere (half a log chunk written, a pipe to an env process half read).
     """
+    from flowrun.training.runstate import StopRequest
+
     request = StopRequest()
 
     def handler(signum: int, frame: Any) -> None:
-        if request.signum is not None:
-            raise KeyboardInterrupt
-        request.signum = signum
+        request.signal(signum)
 
     previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
     try:

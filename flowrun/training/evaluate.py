@@ -27,7 +27,13 @@ from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.experiment.baseline import open_run_log
 from flowrun.experiment.metrics import RunMetrics
-from flowrun.experiment.rundir import unique_dir, write_json
+from flowrun.experiment.rundir import (
+    exit_code_of,
+    mark_done,
+    mark_running,
+    unique_dir,
+    write_json,
+)
 from flowrun.experiment.runner import Experiment, FrameSink
 from flowrun.training.algorithms import algorithm_class
 from flowrun.training.trainer import (
@@ -177,6 +183,7 @@ def evaluate(
     head = {"seed": seed, "deterministic": deterministic, "model": str(path),
             "run": str(run_dir), "run_status": status}
     write_json(out_dir / "metrics.json", {"status": "running", **head})
+    mark_running(out_dir)
     logs: list[Path] = []
 
     def act(obs: Any) -> Any:
@@ -188,12 +195,17 @@ def evaluate(
         rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
         human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs,
                          progress)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as err:
         write_json(out_dir / "metrics.json",
                    {"status": "interrupted", **head, "logs": [p.name for p in logs]})
+        mark_done(out_dir, "interrupted", exit_code=exit_code_of(err))
+        raise
+    except Exception as err:
+        mark_done(out_dir, "failed", error=f"{type(err).__name__}: {err}", exit_code=1)
         raise
     result = EvalResult(out_dir, path, rl, human, logs, status)
     write_json(out_dir / "metrics.json", {"status": "complete", **head, **result.to_dict()})
+    mark_done(out_dir, "complete", exit_code=0)
     return result
 
 

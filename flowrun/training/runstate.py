@@ -1,9 +1,10 @@
-"""A train run folder's state: a lock held while training, and the status in ``metrics.json``.
+"""A train run folder's state: a lock held while training, its status, and stop requests.
 
-``metrics.json`` says ``running`` from the start of training, then ``complete``,
+``status.json`` (:mod:`flowrun.experiment.runstatus`, shared by every command) and
+``metrics.json`` say ``running`` from the start of training, then ``complete``,
 ``interrupted`` (Ctrl-C/SIGTERM: a checkpoint was saved) or ``failed``. A run killed outright
-(SIGKILL, power loss) still says ``running`` but nobody holds its lock: :func:`run_state`
-reports it as ``cut``, so nothing mistakes it for a finished run.
+(SIGKILL, power loss) still says ``running`` but its process is gone and nobody holds its
+lock: :func:`run_state` reports it as ``cut``, so nothing mistakes it for a finished run.
 """
 
 from __future__ import annotations
@@ -11,12 +12,13 @@ from __future__ import annotations
 import fcntl
 import json
 import os
+import signal
 from pathlib import Path
 from types import TracebackType
 from typing import Any
 
 from flowrun.errors import TrainingError
-from flowrun.experiment.rundir import write_json
+from flowrun.experiment.rundir import Interrupted, read_status, write_json
 
 LOCK_FILE = ".train.lock"
 METRICS = "metrics.json"
@@ -110,9 +112,51 @@ def write_status(run_dir: Path, status: str, **fields: Any) -> None:
 
 def run_state(run_dir: Path) -> str:
     """``complete``, ``interrupted``, ``failed``, ``running`` (a live process trains it) or
-    ``cut`` (killed while training, or no ``metrics.json`` at all)."""
+    ``cut`` (killed while training, or no status at all).
+
+    ``status.json`` decides; folders written before it existed are judged by their
+    ``metrics.json`` and lock.
+    """
+    shared = read_status(run_dir).state
+    if shared != "unknown":
+        return "running" if shared == "cut" and is_locked(run_dir) else shared
     metrics = read_metrics(run_dir)
     status = None if metrics is None else metrics.get("status")
     if status in ("complete", "interrupted", "failed"):
         return str(status)
     return "running" if is_locked(run_dir) else "cut"
+
+
+class StopRequest:
+    """Ctrl-C/SIGTERM received: the first asks to stop at the next step boundary (a
+    checkpoint, finished logs), a second one stops at once (:class:`Interrupted`, a
+    ``KeyboardInterrupt`` that knows its signal).
+
+    Call it (``should_stop()``) to know whether a stop was asked; the CLI's signal handlers
+    call :meth:`signal`.
+    """
+
+    def __init__(self) -> None:
+        """No signal yet."""
+        self.signum: int | None = None
+
+    def __call__(self) -> bool:
+        """Whether a stop was asked."""
+        return self.signum is not None
+
+    def signal(self, signum: int) -> None:
+        """Record a signal; raise :class:`Interrupted` (a ``KeyboardInterrupt``) if one came
+        before."""
+        if self.signum is not None:
+            raise Interrupted(self.signum)
+        self.signum = signum
+
+    def check(self) -> None:
+        """Raise :class:`Interrupted` once a stop was asked (call between steps)."""
+        if self.signum is not None:
+            raise Interrupted(self.signum)
+
+    @property
+    def exit_code(self) -> int:
+        """128 + the signal: 130 for Ctrl-C (SIGINT), 143 for SIGTERM."""
+        return 128 + (self.signum if self.signum is not None else signal.SIGINT)

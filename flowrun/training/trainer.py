@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 from flowrun.config.model import ExperimentConfig, TrainConfig
 from flowrun.envs.factory import env_class
 from flowrun.errors import ConfigError, TrainingError
-from flowrun.experiment.rundir import create_run_dir
+from flowrun.experiment.rundir import exit_code_of, mark_done, mark_running, start_run
 from flowrun.fastring.plan import check_numpy_backend
 from flowrun.training.algorithms import algorithm_class, build_hyperparams
 from flowrun.training.callbacks import (
@@ -42,7 +42,7 @@ from flowrun.training.resume import (
 from flowrun.training.resume import (
     resume_config as resume_config,
 )
-from flowrun.training.runstate import RunLock, write_status
+from flowrun.training.runstate import RunLock, StopRequest, write_status
 from flowrun.training.timing import TrainTiming, timed_vec_env, timing_callback
 from flowrun.training.vecenv import make_vec_env, wrap_normalize
 
@@ -144,14 +144,15 @@ def train(
         run_dir = resume_dir
         state = resume_state(run_dir)
         lock = RunLock(run_dir).acquire()
+        mark_running(run_dir)
         note_resume(run_dir, cfg, state, argv)
         keep_monitor_files(run_dir, int(state["timesteps"]))
     else:
-        run_dir = create_run_dir(out, cfg, seed, argv)
+        run_dir = start_run(out, cfg, seed, argv)
         lock = RunLock(run_dir).acquire()
     resumed_from = int((state or {}).get("timesteps", 0))
     stop = should_stop or _never
-    status, done = "failed", resumed_from
+    status, done, error, exit_code = "failed", resumed_from, "", 1
     venv: VecEnv | None = None
     runner: EpisodeRunner | None = None
     model: BaseAlgorithm | None = None
@@ -175,20 +176,27 @@ def train(
         finish = time.perf_counter()
         _save_end(model, run_dir, tc, status)
         timing.finish = time.perf_counter() - finish
-    except KeyboardInterrupt:
-        status = "interrupted"
+        exit_code = 0 if status == "complete" else _stop_code(stop)
+    except KeyboardInterrupt as err:
+        status, exit_code = "interrupted", exit_code_of(err)
         _save_interrupted(model, run_dir, tc)
         raise
     except (EOFError, BrokenPipeError, ConnectionResetError) as err:
         if not stop():
-            raise TrainingError(f"an environment process stopped unexpectedly ({err!r})") from err
+            error = f"an environment process stopped unexpectedly ({err!r})"
+            raise TrainingError(error) from err
         status = "interrupted"  # the signal that stopped us also reached the env processes
+        exit_code = _stop_code(stop)
         _save_interrupted(model, run_dir, tc)
+    except Exception as err:
+        error = f"{type(err).__name__}: {err}"
+        raise
     finally:
         done = int(model.num_timesteps) if model is not None else done
         _close(venv, runner)
         timing.total = time.perf_counter() - timing.started
         _write_train_metrics(run_dir, cfg, tc, seed, status, done, timing, state)
+        mark_done(run_dir, status, error=error or None, exit_code=exit_code)
         lock.release()
     wall = timing.total - timing.startup
     return TrainResult(run_dir, done, wall, status, resumed_from, timing)
@@ -196,6 +204,11 @@ def train(
 
 def _never() -> bool:
     return False
+
+
+def _stop_code(stop: StopRequested) -> int:
+    """130 (Ctrl-C) or 143 (SIGTERM), as the stop request knows."""
+    return stop.exit_code if isinstance(stop, StopRequest) else 130
 
 
 def _learn(
