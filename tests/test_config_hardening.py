@@ -8,6 +8,7 @@ import math
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from flowrun.config import load_config
@@ -171,3 +172,32 @@ def test_settings_flow_accepts_still_load(tmp_path: Path) -> None:
     overrides = ["initial.spacing=random", "vehicles[0].color=1,0,0", "initial.min_gap=0.5"]
     cfg = load_config(SUGIYAMA, [*overrides, "vehicles[0].initial_speed=30"])
     assert (cfg.initial.min_gap, cfg.vehicles.groups[0].color) == (0.5, "1,0,0")
+
+
+@pytest.mark.sumo
+def test_random_spacing_inserts_every_car_of_the_stock_ring() -> None:
+    """It failed for every seed: the random gaps ignored the vehicle type's minGap."""
+    from flowrun.envs.factory import make_env
+
+    cfg = load_config(SUGIYAMA, ["initial.spacing=random"])
+    starts = []
+    env = make_env(cfg)
+    try:
+        for seed in (0, 1, 2):
+            env.reset(seed=seed)
+            ids = env.k.vehicle.get_ids()
+            assert len(ids) == 22
+            starts.append(sorted(env.k.vehicle.get_x_by_id(v) for v in ids))
+    finally:
+        env.close()
+    assert starts[0] != starts[1] != starts[2]
+    gaps = np.diff(starts[0] + [starts[0][0] + 230.0])
+    assert gaps.min() >= 5.0 + 2.5 - 1e-9  # length + SUMO's minGap, front to front
+
+
+def test_sub_millisecond_steps_and_sublane_without_sl2015_are_refused(tmp_path: Path) -> None:
+    assert "milliseconds" in refusal(SUGIYAMA, "sim.step=0.0015").message
+    err = refusal(SUGIYAMA, "sim.lateral_resolution=0.5")
+    assert err.path == "sim.lateral_resolution" and "SL2015" in err.message
+    ok = ["sim.lateral_resolution=0.5", "vehicles[0].lane_change.model=SL2015"]
+    assert load_config(SUGIYAMA, ok).sim.lateral_resolution == 0.5

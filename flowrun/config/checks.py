@@ -144,6 +144,14 @@ def _steps(value: Any) -> str | None:
     return problem
 
 
+def _sim_step(value: Any) -> str | None:
+    """SUMO counts time in milliseconds: a step is a whole number of them, at most 10 s."""
+    problem = positive(high=MAX_STEP, unit=" s")(value)
+    if problem is None and abs(value * 1000 - round(value * 1000)) > 1e-6:
+        problem = f"must be a whole number of milliseconds (SUMO's time unit), got {value!r}"
+    return problem
+
+
 def _teleport_time(value: Any) -> str | None:
     """SUMO ``--time-to-teleport``: finite seconds; a negative value turns teleporting off."""
     problem = _finite(value, False)
@@ -243,7 +251,7 @@ M, SPEED = " m", " m/s"
 
 FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (ExperimentConfig, "name"): _name,
-    (SumoParams, "sim_step"): positive(high=MAX_STEP, unit=" s"),
+    (SumoParams, "sim_step"): _sim_step,
     (SumoParams, "seed"): at_least(0),
     (SumoParams, "port"): between(0, 65535),
     (SumoParams, "num_clients"): at_least(1),

@@ -60,6 +60,7 @@ def check_experiment(cfg: ExperimentConfig, network: Any, loc: Locations) -> Non
     """
     check_env_params(cfg.env.additional_params, {}, loc)
     _check_train_values(cfg, loc)
+    _check_sublane(cfg, loc)
     if network is None:
         return
     _check_network_inputs(cfg, network, loc)
@@ -163,6 +164,20 @@ def _same_kind(value: Any, default: Any, at: KeyPath, loc: Locations) -> None:
     elif len(value) == len(default):  # a record such as ("1", 1, False)
         for i, (item, like) in enumerate(zip(value, default, strict=True)):
             _same_kind(item, like, (*at, i), loc)
+
+
+def _check_sublane(cfg: ExperimentConfig, loc: Locations) -> None:
+    """SUMO's sublane model (``sim.lateral_resolution``) refuses the LC2013 lane changer."""
+    if cfg.sim.lateral_resolution is None:
+        return
+    for i, group in enumerate(cfg.vehicles.groups):
+        if group.lane_change_params.model != "SL2015":
+            raise loc.error(
+                f"SUMO's sublane model needs the SL2015 lane-change model, but vehicles[{i}] "
+                f"('{group.veh_id}') uses {group.lane_change_params.model}; set its "
+                "lane_change: {model: SL2015}, or remove lateral_resolution",
+                ("sim", "lateral_resolution"),
+            )
 
 
 def _check_network_inputs(cfg: ExperimentConfig, network: Any, loc: Locations) -> None:
