@@ -34,6 +34,15 @@ class ConfigError(FlowrunError):
         return f"{where}: {self.message}" if where else self.message
 
 
+class MissingParameterError(ConfigError, KeyError):
+    """A parameter a class requires is not given, e.g. a key of an environment's
+    ``ADDITIONAL_ENV_PARAMS`` missing from ``EnvParams.additional_params``. Also a
+    ``KeyError``, which is what Flow raises for it, so Flow code catching that keeps working.
+    """
+
+    __str__ = Exception.__str__  # the message as written, not KeyError's quoted repr
+
+
 class CountMismatchError(ConfigError, AssertionError):
     """Counts that must agree do not, e.g. ``InitialConfig.edges_distribution``'s per-edge
     counts and the number of vehicles. Also an ``AssertionError``, which is what Flow raises

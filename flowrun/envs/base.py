@@ -38,7 +38,7 @@ from flowrun.envs.vehicles import (
     build_controllers,
     build_table,
 )
-from flowrun.errors import ConfigError
+from flowrun.errors import ConfigError, MissingParameterError
 from flowrun.kernel import Kernel
 from flowrun.kernel.geometry import RingPlacement
 from flowrun.kernel.network import NetworkKernel
@@ -56,7 +56,7 @@ def check_additional_params(cls: type, env_params: EnvParams) -> None:
     if missing:
         keys = ", ".join(f"'{k}' (default there: {declared[k]!r})" for k in missing)
         plural = "s" if len(missing) > 1 else ""
-        raise ConfigError(
+        raise MissingParameterError(
             f"missing key{plural} {keys} that {cls.__name__} declares in its "
             f"ADDITIONAL_ENV_PARAMS; add {'them' if plural else 'it'} to env.additional_params",
             path="env.additional_params",
