@@ -176,6 +176,21 @@ class RingPhysics:
         capped = plan.safe_cap.copy()
         capped[self.rl] = False
         self.capped_humans = np.flatnonzero(capped)
+        rl = self.rl
+        contiguous = rl.size and int(rl[-1]) - int(rl[0]) + 1 == rl.size
+        #: the RL rows as a slice when contiguous (a view instead of a gather)
+        self.rl_rows: slice | IntArray = slice(int(rl[0]), int(rl[-1]) + 1) if contiguous else rl
+        self.rl_all_capped = bool(plan.safe_cap[rl].all()) if rl.size else False
+        self._rl_params = self._column_params(rl)
+
+    def _column_params(self, rows: IntArray) -> dict[str, FloatArray]:
+        """The vehicle-type facts of the cars ``rows`` as columns ``(len(rows), 1)``."""
+        p = self.plan
+        return {
+            name: getattr(p, name)[rows][:, None]
+            for name in ("des_speed", "accel", "decel", "tau", "min_gap", "emergency_decel",
+                         "max_speed")
+        }  # fmt: skip
 
     def _limits(self, b: int) -> list[tuple[FloatArray, FloatArray, FloatArray, FloatArray]]:
         """Per human group: max accel, max decel, lengths and speed limits, for ``b`` rings."""
@@ -194,15 +209,22 @@ class RingPhysics:
             self.last_accel = np.full((self.plan.num_cars, b), np.nan)
         return self.last_accel
 
-    def safe_speed(self, s: RingState, rows: IntArray, leader_speed: FloatArray) -> FloatArray:
+    def safe_speed(
+        self,
+        s: RingState,
+        rows: IntArray | slice,
+        leader_speed: FloatArray,
+        params: dict[str, FloatArray] | None = None,
+    ) -> FloatArray:
         """SUMO's IDM follow speed of the cars ``rows`` (``(len(rows), B)``), m/s."""
-        p = self.plan
-        col = (slice(None), None)
+        if params is None:
+            assert not isinstance(rows, slice)
+            params = self._column_params(rows)
+        c = params
         return sumo_idm_follow_speed(
             s.speed[rows], s.headway[rows], leader_speed[rows],
-            des_speed=p.des_speed[rows][col], accel=p.accel[rows][col],
-            decel=p.decel[rows][col], tau=p.tau[rows][col], min_gap=p.min_gap[rows][col],
-            dt=p.dt,
+            des_speed=c["des_speed"], accel=c["accel"], decel=c["decel"], tau=c["tau"],
+            min_gap=c["min_gap"], dt=self.plan.dt,
         )  # fmt: skip
 
     def step(self, s: RingState, z: FloatArray, rl_accel: FloatArray | None) -> BoolArray:
@@ -242,21 +264,23 @@ class RingPhysics:
         if self.capped_humans.size:
             rows = self.capped_humans
             nxt[rows] = np.minimum(nxt[rows], self.safe_speed(s, rows, vl))
-        rl = self.rl
-        if rl.size:
-            v_safe = self.safe_speed(s, rl, vl)
+        rl = self.rl_rows
+        if self.rl.size:
+            c = self._rl_params
+            v_safe = self.safe_speed(s, rl, vl, c)
             if rl_accel is None:
-                col = (slice(None), None)
                 nxt[rl] = sumo_driven_speed(
-                    v[rl], v_safe, accel=p.accel[rl][col], decel=p.decel[rl][col],
-                    emergency_decel=p.emergency_decel[rl][col],
-                    max_speed=p.max_speed[rl][col], lane_max=p.des_speed[rl][col], dt=dt,
+                    v[rl], v_safe, accel=c["accel"], decel=c["decel"],
+                    emergency_decel=c["emergency_decel"], max_speed=c["max_speed"],
+                    lane_max=c["des_speed"], dt=dt,
                 )  # fmt: skip
+            elif self.rl_all_capped:
+                nxt[rl] = np.minimum(commanded_speed(v[rl], rl_accel, dt, limit), v_safe)
             else:
                 target = commanded_speed(v[rl], rl_accel, dt, limit)
-                cap = p.safe_cap[rl][:, None]
+                cap = p.safe_cap[self.rl][:, None]
                 nxt[rl] = np.where(cap, np.minimum(target, v_safe), target)
-        if self.keep_accel and rl.size:
+        if self.keep_accel and self.rl.size:
             self._accel_rows(b)[rl] = np.nan if rl_accel is None else rl_accel
         s.speed = nxt
         s.odo = s.odo + nxt * dt
