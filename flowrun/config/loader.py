@@ -1,10 +1,14 @@
 """Load an experiment config: YAML file (+ ``--set`` overrides) -> validated ``ExperimentConfig``.
 
 Checks run in this order and the first problem raises one :class:`ConfigError` carrying the
-key path and ``file:line``: YAML syntax and duplicate keys, then each section's keys, types and
+key path and ``file:line``: the file itself (a regular UTF-8 text file of at most 1 MiB, not
+empty), YAML syntax, duplicate keys, size and nesting, then each section's keys, types and
 values, then what spans sections (unique vehicle group ids, controller names and parameters,
-inflow vehicle types, network-specific limits). The environment class is resolved when the
-environment is made (config sits below ``flowrun.envs`` and does not import it).
+inflow vehicle types, network-specific limits, and :mod:`flowrun.config.experiment_checks`:
+step length, the seeded initial placement, departure speeds, training values). Settings that
+would have no effect are logged as warnings. The environment class is resolved when the
+environment is made (config sits below ``flowrun.envs`` and does not import it);
+:mod:`flowrun.config.preflight` (``flowrun validate``) resolves it too.
 """
 
 from __future__ import annotations
