@@ -23,7 +23,13 @@ import ray
 from flowrun.config.loader import load_config
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.recording.reader import open_log
-from flowrun.training.rllib import INSTALL_HINT, evaluate_rllib, require_ray, train_rllib
+from flowrun.training.rllib import (
+    INSTALL_HINT,
+    evaluate_rllib,
+    is_rllib_run,
+    require_ray,
+    train_rllib,
+)
 from flowrun.training.rllib.cluster import check_reachable, host_port, resolve_address
 from flowrun.training.rllib.envs import policy_mapping, probe_agents
 from flowrun.training.rllib.evaluate import load_policies
@@ -90,6 +96,7 @@ def test_single_agent_run_folder(ring_run: Path) -> None:
     assert metrics["best_eval_return"] == max(scores)
     assert (ring_run / "best_checkpoint" / "learner_group").is_dir()
     assert list((ring_run / "tensorboard").glob("events.out.tfevents.*"))
+    assert is_rllib_run(ring_run) and not is_rllib_run(ring_run / "tensorboard")
 
 
 def test_resume_continues_the_iteration_counter(ring_run: Path) -> None:

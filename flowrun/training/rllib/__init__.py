@@ -10,11 +10,22 @@ command (:func:`flowrun.training.rllib.deps.require_ray`).
 from __future__ import annotations
 
 import importlib
+from pathlib import Path
 from typing import Any
 
 from flowrun.training.rllib.deps import INSTALL_HINT, require_ray
 
-__all__ = ["INSTALL_HINT", "evaluate_rllib", "require_ray", "train_rllib"]
+__all__ = ["INSTALL_HINT", "evaluate_rllib", "is_rllib_run", "require_ray", "train_rllib"]
+
+
+def is_rllib_run(run_dir: Path) -> bool:
+    """Whether a train run folder holds RLlib checkpoints (``flowrun eval`` picks
+    :func:`evaluate_rllib` for it) rather than stable-baselines3 models. Needs no Ray."""
+    names = ("final_checkpoint", "best_checkpoint")
+    if any((run_dir / name / "learner_group").is_dir() for name in names):
+        return True
+    return any((run_dir / "checkpoints").glob("iter_*/learner_group"))
+
 
 _LAZY = {
     "train_rllib": "flowrun.training.rllib.train",
