@@ -119,6 +119,8 @@ def test_each_vehicle_gets_its_own_object_made_with_flows_constructor() -> None:
         assert env.k.vehicle.get_acc_controller("u_1") is a
         assert env.k.vehicle.get_acc_controller("u_2") is not a
         assert isinstance(env.controls[0].controller, PerVehicleGroup)
+        # memory per vehicle and no vectorised formula: the numpy ring backend refuses it
+        assert env.controls[0].controller.stateful
     finally:
         env.close()
 
@@ -223,5 +225,26 @@ def test_builtin_controller_answers_flows_get_action() -> None:
         view = env.k.vehicle.get_acc_controller("u_0")
         assert idm.get_action(env) == pytest.approx(view.get_action(env))
         assert not IDMController.per_vehicle and FlowIDM.per_vehicle
+    finally:
+        env.close()
+
+
+def test_flows_fail_safe_helpers_answer_for_the_vehicle() -> None:
+    cf = SumoCarFollowingParams(accel=1.5, decel=2.0)
+    env = ring_env((Constant, {"accel": 0.5}), n=4, cf=cf)
+    try:
+        speeds(env, 20)
+        c = env.k.vehicle.get_acc_controller("u_0")
+        vk = env.k.vehicle
+        v, h = vk.get_speed("u_0"), vk.get_headway("u_0")
+        leader = vk.get_leader("u_0")
+        assert leader is not None
+        v_lead = vk.get_speed(leader)
+        assert c.safe_velocity(env) == pytest.approx(2 * h / 0.1 + v_lead - v)
+        assert c.get_feasible_action(10.0) == 1.5
+        assert c.get_feasible_action(-10.0) == -2.0
+        assert c.get_safe_velocity_action(env, 0.2) == pytest.approx(0.2)  # far from unsafe
+        # above the lane's 30 m/s limit within one step: capped to reach it exactly
+        assert c.get_obey_speed_limit_action(env, 400.0) == pytest.approx((30 - v) / 0.1)
     finally:
         env.close()

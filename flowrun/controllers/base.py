@@ -272,6 +272,43 @@ class AccelerationController:
             "get_accel(env)"
         )
 
+    # ------------------------------------------------------------- Flow's fail-safe helpers
+    def _one(self, env: Any) -> CarFollowingInputs:
+        from flowrun.controllers.view import read_inputs
+
+        if self.veh_id is None:
+            raise ValueError(f"{type(self).__name__}: Flow's per-vehicle helpers need veh_id")
+        return read_inputs(env, self.veh_id, self.max_accel, self.max_deaccel)
+
+    def _safe(self, name: str, env: Any, action: float) -> float:
+        out = apply_fail_safes((name,), np.array([float(action)]), self._one(env), self.time_delay)
+        return float(out[0])
+
+    def get_safe_action_instantaneous(self, env: Any, action: float) -> float:
+        """Flow's helper: ``action`` after the ``instantaneous`` fail-safe, m/s^2."""
+        return self._safe("instantaneous", env, action)
+
+    def get_safe_velocity_action(self, env: Any, action: float) -> float:
+        """Flow's helper: ``action`` after the ``safe_velocity`` fail-safe, m/s^2."""
+        return self._safe("safe_velocity", env, action)
+
+    def get_obey_speed_limit_action(self, env: Any, action: float) -> float:
+        """Flow's helper: ``action`` after the ``obey_speed_limit`` fail-safe, m/s^2."""
+        return self._safe("obey_speed_limit", env, action)
+
+    def get_feasible_action(self, action: float) -> float:
+        """Flow's helper: ``action`` clipped to ``[-max_deaccel, max_accel]``, m/s^2."""
+        return float(min(max(float(action), -self.max_deaccel), self.max_accel))
+
+    def safe_velocity(self, env: Any) -> float:
+        """Flow's safe velocity of this vehicle, m/s: ``2*h/dt + (v_lead - v) - 2*v*delay``
+        (``inf`` without a leader)."""
+        x = self._one(env)
+        v = float(x.speed[0])
+        return float(
+            2 * x.headway[0] / x.dt + (x.leader_speed[0] - v) - 2 * v * self.time_delay
+        )
+
     def get_action(self, env: Any) -> float | None:
         """Flow's ``get_action(env)``: this vehicle's acceleration with noise and fail-safes
         (m/s^2), or ``None`` when SUMO drives it this step (see

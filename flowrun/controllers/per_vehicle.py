@@ -132,6 +132,9 @@ class PerVehicleGroup(AccelerationController):
             :meth:`bind`).
     """
 
+    #: the users' objects may keep memory between steps (and no vectorised formula exists)
+    stateful = True
+
     def __init__(
         self, cls: type[AccelerationController], params: dict[str, Any],
         car_following_params: Any = None,
