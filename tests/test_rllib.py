@@ -76,6 +76,20 @@ def _lines(path: Path) -> list[dict[str, Any]]:
     return [json.loads(line) for line in path.read_text().splitlines()]
 
 
+# ---------------------------------------------------------------- before Ray starts here
+def test_unreachable_cluster_is_an_error_and_leaves_no_run_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    if ray.is_initialized():
+        pytest.skip("Ray is already running in this process (run this test first)")
+    monkeypatch.setenv("RAY_ADDRESS", "127.0.0.1:1")  # a closed port on this machine
+    cfg = load_config(CONFIGS / "rllib_ring.yaml")
+    with pytest.raises(TrainingError, match=r"cannot reach the Ray cluster at 127\.0\.0\.1:1"):
+        train_rllib(cfg, out=tmp_path)
+    assert not ray.is_initialized()
+    assert list(tmp_path.iterdir()) == []
+
+
 # ---------------------------------------------------------------- training, single agent
 def test_single_agent_run_folder(ring_run: Path) -> None:
     for name in ("config.yaml", "command.txt", "versions.json", "metrics.json"):

@@ -29,7 +29,7 @@ from flowrun.config.model import ExperimentConfig, TrainConfig
 from flowrun.errors import TrainingError
 from flowrun.experiment.rundir import create_run_dir, write_json
 from flowrun.training.callbacks import TrainProgress
-from flowrun.training.rllib.cluster import ray_session
+from flowrun.training.rllib.cluster import RaySession, ray_session
 from flowrun.training.rllib.deps import require_ray
 from flowrun.training.rllib.options import (
     build_ppo_config,
@@ -84,13 +84,7 @@ def train_rllib(
         ConfigError: bad ``train:`` settings (before any work).
         TrainingError: no rllib extra, unreachable cluster, nothing to resume from.
     """
-    from flowrun.training.rllib.envs import (
-        ENV_NAME,
-        env_config_of,
-        policy_mapping,
-        probe_agents,
-        register,
-    )
+    from flowrun.training.rllib.envs import policy_mapping, probe_agents
 
     ray = require_ray()
     tc = train_section(cfg)
@@ -100,75 +94,90 @@ def train_rllib(
     agents = probe_agents(cfg)  # a wrong env.class fails here, before Ray starts
     policies = policy_mapping(cfg, agents, tc.policies) if agents is not None else None
     state = read_state(resume_dir) if resume_dir is not None else None
-    if resume_dir is not None and state is not None:
-        run_dir = resume_dir
-        _note_resume(run_dir, cfg, state, argv)
-    else:
-        run_dir = create_run_dir(out, cfg, seed, argv)
-    _add_version(run_dir, "ray", str(ray.__version__))
-    if policies is not None:
-        write_json(run_dir / "policies.json", policies)
+    # Ray first: an unreachable cluster leaves no run folder behind
+    with ray_session(ray_address) as session:
+        if resume_dir is not None and state is not None:
+            run_dir = resume_dir
+            _note_resume(run_dir, cfg, state, argv)
+        else:
+            run_dir = create_run_dir(out, cfg, seed, argv)
+        _add_version(run_dir, "ray", str(ray.__version__))
+        if policies is not None:
+            write_json(run_dir / "policies.json", policies)
+        return _train(run_dir, cfg, seed, sections, policies, state, session, progress)
+
+
+def _train(
+    run_dir: Path,
+    cfg: ExperimentConfig,
+    seed: int,
+    sections: dict[str, dict[str, Any]],
+    policies: dict[str, str] | None,
+    state: dict[str, Any] | None,
+    session: RaySession,
+    progress: TrainProgress | None,
+) -> TrainResult:
+    """Build the algorithm, train, checkpoint; ``metrics.json`` whatever happens."""
+    from tensorboardX import SummaryWriter
+
+    from flowrun.training.rllib.envs import ENV_NAME, env_config_of, register
+
+    tc = train_section(cfg)
     ckpt_dir = run_dir / "checkpoints"
     ckpt_dir.mkdir(exist_ok=True)
     done = int(state["timesteps"]) if state else 0
     best = state.get("best_return") if state else None
-    status, wall, iteration, address = "interrupted", 0.0, 0, ""
+    status, wall, iteration = "interrupted", 0.0, 0
     algo: Any = None
     try:
-        with ray_session(ray_address) as session:
-            address = session.address
-            register()
-            iter_steps = steps_per_iteration(
-                build_ppo_config(sections, ENV_NAME, {}, 0, seed, session.cpus)
-            )
-            config = build_ppo_config(
-                sections, ENV_NAME, env_config_of(cfg), env_runners(tc),
-                seed if state is None else seed + done,  # resumed runs see new episodes
-                session.cpus,
-                env_config_of(cfg, evaluate=True) if tc.eval_freq > 0 else None,
-                eval_interval=max(1, round(tc.eval_freq / iter_steps)),
-                eval_episodes=tc.eval_episodes,
-                policies=policies,
-            )  # fmt: skip
-            algo = config.build_algo()
-            if state is not None:
-                algo.restore_from_path(str((ckpt_dir / state["checkpoint"]).resolve()))
-            start = time.monotonic()
-            from tensorboardX import SummaryWriter
-
-            writer = SummaryWriter(str(run_dir / "tensorboard"))
-            try:
-                for result in _iterations(algo, tc, done):
-                    iteration = int(result["training_iteration"])
-                    before, done = done, int(result.get("num_env_steps_sampled_lifetime", 0))
-                    ret = _number(result, "env_runners", "episode_return_mean")
-                    score = _number(result, "evaluation", "env_runners", "episode_return_mean")
-                    _log_iteration(run_dir, writer, result, iteration, done, ret, score)
-                    if score is not None and (best is None or score > best):
-                        best = score
-                        _save(algo, run_dir / BEST_CHECKPOINT)
-                    freq = tc.checkpoint_freq
-                    if freq > 0 and done // freq > before // freq:
-                        save_checkpoint(algo, ckpt_dir, iteration, done, best)
-                    if progress is not None:
-                        progress(done, tc.total_timesteps, ret)
-                status = "complete"
-                _save(algo, run_dir / FINAL_CHECKPOINT)
-                save_checkpoint(algo, ckpt_dir, iteration or algo.iteration, done, best)
-            except KeyboardInterrupt:
-                path = save_checkpoint(algo, ckpt_dir, algo.iteration, done, best)
-                log.info("interrupted: checkpoint saved to %s", path)
-                raise
-            finally:
-                wall = time.monotonic() - start
-                writer.close()
-                algo.stop()
-                algo = None
+        register()
+        iter_steps = steps_per_iteration(
+            build_ppo_config(sections, ENV_NAME, {}, 0, seed, session.cpus)
+        )
+        config = build_ppo_config(
+            sections, ENV_NAME, env_config_of(cfg), env_runners(tc),
+            seed if state is None else seed + done,  # resumed runs see new episodes
+            session.cpus,
+            env_config_of(cfg, evaluate=True) if tc.eval_freq > 0 else None,
+            eval_interval=max(1, round(tc.eval_freq / iter_steps)),
+            eval_episodes=tc.eval_episodes,
+            policies=policies,
+        )  # fmt: skip
+        algo = config.build_algo()
+        if state is not None:
+            algo.restore_from_path(str((ckpt_dir / state["checkpoint"]).resolve()))
+        start = time.monotonic()
+        writer = SummaryWriter(str(run_dir / "tensorboard"))
+        try:
+            for result in _iterations(algo, tc, done):
+                iteration = int(result["training_iteration"])
+                before, done = done, int(result.get("num_env_steps_sampled_lifetime", 0))
+                ret = _number(result, "env_runners", "episode_return_mean")
+                score = _number(result, "evaluation", "env_runners", "episode_return_mean")
+                _log_iteration(run_dir, writer, result, iteration, done, ret, score)
+                if score is not None and (best is None or score > best):
+                    best = score
+                    _save(algo, run_dir / BEST_CHECKPOINT)
+                freq = tc.checkpoint_freq
+                if freq > 0 and done // freq > before // freq:
+                    save_checkpoint(algo, ckpt_dir, iteration, done, best)
+                if progress is not None:
+                    progress(done, tc.total_timesteps, ret)
+            status = "complete"
+            _save(algo, run_dir / FINAL_CHECKPOINT)
+            save_checkpoint(algo, ckpt_dir, iteration or algo.iteration, done, best)
+        except KeyboardInterrupt:
+            path = save_checkpoint(algo, ckpt_dir, algo.iteration, done, best)
+            log.info("interrupted: checkpoint saved to %s", path)
+            raise
+        finally:
+            wall = time.monotonic() - start
+            writer.close()
     finally:
         if algo is not None:
             algo.stop()
         _write_metrics(run_dir, cfg, tc, seed, status, done, wall, state, iteration, best,
-                       address, policies)  # fmt: skip
+                       session.address, policies)  # fmt: skip
     resumed = int(state["timesteps"]) if state else 0
     return TrainResult(run_dir, done, wall, status, resumed)
 
