@@ -12,7 +12,7 @@ Rows:
 - ``encode_frame`` / ``encode_stats``: protobuf encoding of the two messages.
 - ``add_message x2``: ``McapWriter.add_message`` of both messages into the open chunk.
 - ``chunk writes``: what joining, CRC, zstd compression and writing of the finished chunks
-  add per step (``add_message`` into a file with 4 MiB chunks, ``finish()`` included, minus
+  add per step (``add_message`` into a file with ``CHUNK_SIZE`` chunks, ``finish()`` included, minus
   the row above).
 
 Each number is the median of ``--repeats`` runs (default 5); a 2-core machine under load
