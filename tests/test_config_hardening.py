@@ -166,6 +166,14 @@ def test_ignored_settings_are_warned(tmp_path: Path, caplog: pytest.LogCaptureFi
     with caplog.at_level(logging.WARNING):
         validate_config(path)
     assert f"{path}:8: sim.emission_path is used only by Experiment.run" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING):
+        validate_config(SUGIYAMA, ["sim.port=9000", "sim.save_render=true"])
+        assert "sim.port is Flow's TraCI port" in caplog.text
+        assert "sim.save_render is for Flow's pyglet renderer" in caplog.text
+        caplog.clear()
+        validate_config(SUGIYAMA)  # the stock config: no warnings
+    assert caplog.text == ""
 
 
 def test_settings_flow_accepts_still_load(tmp_path: Path) -> None:

@@ -26,6 +26,7 @@ import numpy as np
 
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.overrides import parse_key
+from flowrun.config.params import SumoParams
 from flowrun.config.yamlio import KeyPath, Locations
 from flowrun.errors import ConfigError
 
@@ -269,6 +270,20 @@ def _check_train_values(cfg: ExperimentConfig, loc: Locations) -> None:
         raise loc.error(err.message, sub_path(err.path)) from None
 
 
+#: ``sim`` settings Flow has that flowrun stores (so Flow code can read them) but never uses.
+STORED_ONLY = {
+    "port": "is Flow's TraCI port; flowrun runs SUMO in-process (libsumo) and ignores it",
+    "num_clients": "is Flow's number of TraCI clients; flowrun ignores it",
+    "save_render": "is for Flow's pyglet renderer, which flowrun does not have "
+    "(baseline --render writes a GIF)",
+    "show_radius": "is for Flow's pyglet renderer, which flowrun does not have",
+    "force_color_update": "is Flow's sumo-gui colouring switch; flowrun ignores it",
+    "color_by_speed": "is Flow's sumo-gui colouring switch; flowrun ignores it",
+    "disable_collisions": "is ignored: flowrun always counts collisions (and ends the "
+    "episode on one)",
+}
+
+
 def ignored_settings(cfg: ExperimentConfig) -> list[tuple[KeyPath, str]]:
     """Settings a config may hold that change nothing in a ``baseline``/``train`` run.
 
@@ -282,6 +297,10 @@ def ignored_settings(cfg: ExperimentConfig) -> list[tuple[KeyPath, str]]:
             "is used only by Experiment.run(convert_to_csv=True) in Python; flowrun baseline "
             "and train log to MCAP in the run folder (flowrun replay --csv exports CSV)",
         ))  # fmt: skip
+    defaults = SumoParams()
+    for name, why in STORED_ONLY.items():
+        if getattr(cfg.sim, name) != getattr(defaults, name):
+            out.append((("sim", name), why))
     if cfg.vehicles.num_vehicles == 0 and not cfg.network.net_params.inflows.get():  # type: ignore[union-attr]
         template = cfg.network.net_params.template
         if not (isinstance(template, dict) and template.get("rou")):
