@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from flowrun.config.params import InitialConfig, VehicleParams
-from flowrun.errors import ConfigError
+from flowrun.errors import ConfigError, CountMismatchError
 from flowrun.networks.base import NetworkSpec, StartPositions
 from flowrun.suggest import did_you_mean
 
@@ -132,7 +132,7 @@ def place_on_network(
     if isinstance(distribution, dict):
         total = sum(int(v) for v in distribution.values())
         if total != len(vehicle_space):
-            raise ConfigError(
+            raise CountMismatchError(
                 f"edges_distribution places {total} vehicles but the vehicles section has "
                 f"{len(vehicle_space)}; make the counts add up",
                 path="edges_distribution",
