@@ -118,6 +118,7 @@ def test_paths_that_are_not_config_files(app: typer.Typer, tmp_path: Path) -> No
         ("sim.step=10", "shortest edge"),
         ("sim.step={a: [1", "cannot read the value"),
         ("name=../elsewhere", "must not contain '/'"),
+        ("name=" + "n" * 300, "at most 100 characters"),
         ("train.hyperparams.gamma=2", "<= 1"),
         ("env.additional_params.max_accel=[1]", "> 0"),
     ],

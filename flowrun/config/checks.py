@@ -46,6 +46,8 @@ MAX_SPEED = 1e3
 MAX_STEP = 10.0
 #: Most vehicles in one group or inflow (SUMO handles tens of thousands; more is a typo).
 MAX_VEHICLES = 100_000
+#: Longest experiment name (it names a folder; file systems allow 255 bytes).
+MAX_NAME = 100
 #: Most steps of a horizon or warm-up.
 MAX_STEPS = 10**9
 
@@ -234,6 +236,11 @@ def _name(value: Any) -> str | None:
         return "must not be empty"
     if any(c in value for c in "/\\") or value in (".", ".."):
         return f"names the run folder, so it must not contain '/' or '\\', got {value!r}"
+    if not value.isprintable() or len(value) > MAX_NAME:
+        return (
+            f"names the run folder, so it must be printable text of at most {MAX_NAME} "
+            f"characters, got {value[:40]!r}{'...' if len(value) > 40 else ''}"
+        )
     return None
 
 
@@ -294,6 +301,7 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (InFlow, "number"): at_least(1, high=MAX_VEHICLES),
     (InFlow, "end"): at_least(0, high=1e9),
     (InFlow, "depart_speed"): _depart_speed,
+    (InFlow, "name"): _vehicle_id,
     (TrainConfig, "algorithm"): one_of("algorithm", ALGORITHMS),
     (TrainConfig, "total_timesteps"): at_least(1, high=1e13),
     (TrainConfig, "n_envs"): at_least(1, high=1024),
