@@ -9,7 +9,7 @@ import numpy as np
 
 from flowrun.config.params import VehicleParams
 from flowrun.controllers.base import AccelerationController
-from flowrun.controllers.per_vehicle import PerVehicleGroup
+from flowrun.controllers.per_vehicle import FlowStyleDriver, PerVehicleGroup
 from flowrun.controllers.registry import build_controller, resolve_controller
 from flowrun.controllers.view import VehicleControllerView
 from flowrun.kernel.population import Population, VehicleClass, VehicleTable
@@ -141,12 +141,17 @@ class FlowControllers:
 
     Acceleration controllers are per-vehicle views over the group's vectorised controller
     (kept per vehicle, so a stateful one keeps its memory between calls); lane-change and
-    routing controllers are one object per group, as flowrun runs them.
+    routing controllers are one object per group, as flowrun runs them, except Flow-style
+    ones (``flow_style``), which are the vehicle's own object when its id is given.
     """
 
-    def __init__(self, vehicles: VehicleParams, controls: list[GroupControl]) -> None:
+    def __init__(
+        self, vehicles: VehicleParams, controls: list[GroupControl],
+        flow_style: FlowStyleDriver | None = None,
+    ) -> None:  # fmt: skip
         self._vehicles = vehicles
         self._controls = controls
+        self._flow_style = flow_style
         self._views: dict[str, VehicleControllerView] = {}
         self._lane: dict[int, Any] = {}
         self._route: dict[int, Any] = {}
@@ -165,15 +170,24 @@ class FlowControllers:
             )  # fmt: skip
         return self._views[veh_id]
 
-    def lane_changing(self, group: int) -> Any:
-        """The group's lane-change controller."""
+    def lane_changing(self, group: int, veh_id: str | None = None) -> Any:
+        """The group's lane-change controller (the vehicle's own for a Flow-style class)."""
+        if self._flow_style is not None and veh_id is not None:
+            own = self._flow_style.object_of(veh_id, group, "lane_change")
+            if own is not None:
+                return own
         if group not in self._lane:
             spec = self._vehicles.groups[group].lane_change_controller
             self._lane[group] = build_controller(spec.type, dict(spec.params))
         return self._lane[group]
 
-    def routing(self, group: int) -> Any:
-        """The group's routing controller (``None`` without one)."""
+    def routing(self, group: int, veh_id: str | None = None) -> Any:
+        """The group's routing controller (``None`` without one; the vehicle's own for a
+        Flow-style class)."""
+        if self._flow_style is not None and veh_id is not None:
+            own = self._flow_style.object_of(veh_id, group, "routing")
+            if own is not None:
+                return own
         if group not in self._route:
             spec = self._vehicles.groups[group].routing_controller
             self._route[group] = None if spec is None else build_controller(
