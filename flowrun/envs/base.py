@@ -237,7 +237,9 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
             read_xy=self.read_xy or (self.record_frames and not closed),
             rng=route_rng,
         )
-        self.k.vehicle.controllers = FlowControllers(self.network.vehicles, self.controls)
+        self.k.vehicle.controllers = FlowControllers(
+            self.network.vehicles, self.controls, self._flow_style
+        )
         deferred = self.record_frames and closed and not self.read_xy
         self._placement = self.k.vehicle.placement() if deferred else None
         for control in self.controls:
