@@ -27,9 +27,11 @@ def app() -> typer.Typer:
 
 
 @pytest.fixture(autouse=True)
-def _in_tmp(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def _in_tmp(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
     monkeypatch.chdir(tmp_path)  # a run folder, if one were made, would appear here
-    logging.getLogger("flowrun").setLevel(logging.ERROR)
+    caplog.set_level(logging.ERROR, logger="flowrun")  # warnings of valid mutants
 
 
 def one_per_kind(seed: int) -> list[Mutant]:
