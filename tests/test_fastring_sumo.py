@@ -145,3 +145,17 @@ def test_a_numpy_episode_log_holds_what_the_sumo_baseline_log_holds(tmp_path: An
     assert [s.mean_speed for s in stats] == pytest.approx([s.mean_speed for s in sumo_stats])
     assert log.metadata["network_length"] == sumo_log.metadata["network_length"]
     assert log.metadata["edge_starts"] == sumo_log.metadata["edge_starts"]
+
+
+@pytest.mark.parametrize("controller", ["BCM", "OVM", "LinearOVM", "Gipps"])
+def test_other_car_following_formulas_equal_sumo_too(controller: str) -> None:
+    cfg = load("sugiyama_noise", f"vehicles[0].acceleration_controller={{type: {controller}}}")
+    sumo = sumo_rollout(cfg, 2, None, 1000)
+    fast = fast_rollout(cfg, 2, None, 1000)
+    steps = len(sumo["r"])  # some of these models crash with Flow's defaults and noise
+    assert np.abs(sumo["v"] - fast["v"][: steps + 1]).max() < TOL
+    assert np.abs(np.diff(sumo["v"], axis=0)).max() > 0.01  # the cars really move
+    crashed = bool(sumo["end"][-1][0])
+    assert fast["crash"][:steps].any() == crashed
+    if crashed:
+        assert int(np.argmax(fast["crash"])) == steps - 1

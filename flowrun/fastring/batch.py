@@ -29,6 +29,7 @@ from flowrun.fastring.physics import (
 )
 from flowrun.fastring.plan import RingPlan
 from flowrun.networks.base import Network
+from flowrun.networks.ring import ring_edge_count
 
 #: simulation steps of controller noise drawn at once per ring
 NOISE_BLOCK = 128
@@ -292,7 +293,26 @@ class RingPhysics:
         s.steps = s.steps + 1
         if headway.min() >= -NUMERICAL_EPS:
             return np.zeros(b, dtype=bool)
-        return np.asarray((headway < -NUMERICAL_EPS).any(axis=0))
+        return reported_collisions(s, headway < -NUMERICAL_EPS)
+
+
+def reported_collisions(s: RingState, overlap: BoolArray) -> BoolArray:
+    """Which rings SUMO reports a collision on, given which cars overlap their leader.
+
+    SUMO checks each lane's consecutive vehicles (fronts on the same lane), and its rearmost
+    vehicle against a leader whose back hangs over the lane's end: such an overlap across an
+    edge boundary is seen only when the follower is the only car on its edge (measured on
+    flowrun's ring, ``tests/test_fastring_sumo.py``).
+    """
+    n_edges = np.array([ring_edge_count(float(x)) for x in s.length])
+    edge_len = s.length / n_edges
+    edge = np.minimum(np.floor(np.mod(s.u, s.length) / edge_len), n_edges - 1).astype(np.int64)
+    same = edge == s.of_leader(edge)
+    cols = np.broadcast_to(np.arange(edge.shape[1]), edge.shape)
+    count = np.zeros((int(n_edges.max()), edge.shape[1]), dtype=np.int64)
+    np.add.at(count, (edge, cols), 1)
+    alone = count[edge, cols] == 1
+    return np.asarray((overlap & (same | alone)).any(axis=0))
 
 
 @dataclass
