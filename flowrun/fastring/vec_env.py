@@ -200,7 +200,8 @@ class RingVectorEnv(gymnasium.vector.VectorEnv):
         info: dict[str, Any] = {"mean_speed": speed, "crash": terminated}
         if ended.any():
             final_obs = np.empty(self.num_envs, dtype=object)
-            final_obs[np.flatnonzero(ended)] = list(final)
+            for k, i in enumerate(np.flatnonzero(ended).tolist()):
+                final_obs[i] = final[k]
             info["final_obs"] = final_obs
             info["_final_obs"] = ended
         return obs, rewards, terminated, truncated, info
