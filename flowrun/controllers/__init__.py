@@ -4,7 +4,10 @@ Flow-compatible names: ``from flowrun.controllers import IDMController, Continuo
 RLController``, and Flow's module paths (``flowrun.controllers.car_following_models``,
 ``.velocity_controllers``, ``.routing_controllers``, ``.lane_change_controllers``,
 ``.base_controller``, ``.rlcontroller``). :class:`VehicleControllerView` is one vehicle's
-controller with Flow's ``get_action(env)``.
+controller with Flow's ``get_action(env)``. Controllers written Flow's way, per vehicle
+(``BaseController.get_accel(env)``, ``BaseRouter.choose_route(env)``,
+``BaseLaneChangeController.get_lane_change_action(env)``), are driven per vehicle as in Flow
+(:mod:`flowrun.controllers.per_vehicle`).
 """
 
 from flowrun.controllers.base import (

@@ -1,7 +1,9 @@
 """Flow's ``flow.controllers.base_controller`` import path.
 
-``BaseController`` is flowrun's :class:`~flowrun.controllers.base.AccelerationController`:
-a subclass implements the vectorised ``_accel(inputs)``, not Flow's ``get_accel(env)``.
+``BaseController`` is flowrun's :class:`~flowrun.controllers.base.AccelerationController`.
+A subclass either implements Flow's per-vehicle ``get_accel(self, env)`` (one object per
+vehicle, driven as Flow drives it; see :mod:`flowrun.controllers.per_vehicle`) or flowrun's
+vectorised ``_accel(inputs)`` (one object per vehicle group, the fast path).
 """
 
 from flowrun.controllers.base import AccelerationController
