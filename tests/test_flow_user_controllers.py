@@ -253,3 +253,30 @@ def test_flows_fail_safe_helpers_answer_for_the_vehicle() -> None:
         assert c.get_obey_speed_limit_action(env, 400.0) == pytest.approx((30 - v) / 0.1)
     finally:
         env.close()
+
+
+def test_flow_style_idm_on_the_open_merge_matches_the_builtin() -> None:
+    from flowrun.core.params import InFlows
+    from flowrun.networks import MergeNetwork
+
+    def run(ctrl: tuple[Any, dict[str, Any]]) -> dict[str, float]:
+        vehicles = VehicleParams()
+        vehicles.add("human", acceleration_controller=ctrl,
+                     car_following_params=SumoCarFollowingParams(speed_mode="obey_safe_speed"))
+        inflows = InFlows()
+        inflows.add("inflow_highway", "human", vehs_per_hour=2000, depart_speed=10)
+        inflows.add("inflow_merge", "human", vehs_per_hour=300, depart_speed=7.5)
+        net = MergeNetwork("merge", vehicles, NetParams(inflows=inflows))
+        env = TestEnv(EnvParams(horizon=10**9), SumoParams(sim_step=0.2, seed=3), net)
+        try:
+            env.reset(seed=3)
+            for _ in range(300):  # 60 s: cars enter, merge and leave
+                env.step(None)
+            vk = env.k.vehicle
+            return {v: vk.get_speed(v) for v in vk.get_ids()}
+        finally:
+            env.close()
+
+    flow_style, builtin = run((FlowIDM, {})), run((IDMController, {}))
+    assert len(flow_style) > 5 and set(flow_style) == set(builtin)
+    assert all(flow_style[v] == pytest.approx(builtin[v], abs=1e-9) for v in builtin)
