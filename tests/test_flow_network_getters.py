@@ -109,3 +109,19 @@ def test_edges_distribution_counts_that_do_not_add_up_are_an_assertion_error_too
         net.start_positions(None)  # type: ignore[arg-type]
     assert isinstance(err.value, ConfigError) and isinstance(err.value, CountMismatchError)
     assert "places 3 vehicles" in str(err.value) and "has 4" in str(err.value)
+
+
+def test_flows_network_attributes_describe_the_road_in_flows_formats() -> None:
+    net = ring_of(RingNetwork)
+    assert net.routes["top"] == [(["top", "left", "bottom", "right"], 1.0)]
+    assert net.edge_starts == [("bottom", 0.0), ("right", 57.5), ("top", 115.0), ("left", 172.5)]
+    assert [e["id"] for e in net.edges] == ["bottom", "right", "top", "left"]
+    assert {(e["from"], e["to"], e["numLanes"], e["speed"], e["length"]) for e in net.edges} == {
+        ("bottom", "right", 1, 30.0, 57.5), ("right", "top", 1, 30.0, 57.5),
+        ("top", "left", 1, 30.0, 57.5), ("left", "bottom", 1, 30.0, 57.5)}  # fmt: skip
+    assert math.hypot(net.nodes[0]["x"], net.nodes[0]["y"]) == pytest.approx(230 / (2 * math.pi))
+    assert net.connections is None and net.internal_edge_starts == []
+    assert ring_of(NoRoutes).routes["left"] == [(["left"], 1.0)]
+    # a user's network may still set them itself, as Flow's networks do in __init__
+    net.edges = [{"id": "mine"}]
+    assert net.edges == [{"id": "mine"}]

@@ -20,6 +20,7 @@ from flowrun.config.params import (
     VehicleParams,
 )
 from flowrun.errors import ConfigError
+from flowrun.networks.flow_attributes import FlowAttributes
 from flowrun.suggest import did_you_mean
 
 
@@ -138,7 +139,7 @@ class StartPositions:
     lanes: list[int]
 
 
-class Network:
+class Network(FlowAttributes):
     """Base of all networks (Flow's ``Network``/``Scenario``).
 
     Args:
