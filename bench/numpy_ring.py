@@ -42,12 +42,15 @@ from flowrun.fastring.plan import ring_plan
 from flowrun.fastring.vec_env import RingVecEnv
 
 
-def rate(step: object, rings: int, steps: int) -> float:
-    """Env-steps per second of ``steps`` calls of ``step()`` on ``rings`` rings."""
-    start = time.perf_counter()
+def rate(step: object, rings: int, steps: int) -> str:
+    """Env-steps per second of ``steps`` calls of ``step()`` on ``rings`` rings: per second of
+    wall time, and per second of this process's CPU time (what an idle core would give; on a
+    loaded machine the wall-clock rate falls with the share of a core the process gets)."""
+    start, cpu = time.perf_counter(), time.process_time()
     for _ in range(steps):
         step()  # type: ignore[operator]
-    return rings * steps / (time.perf_counter() - start)
+    wall, used = time.perf_counter() - start, time.process_time() - cpu
+    return f"{rings * steps / wall:,.0f} ({rings * steps / used:,.0f})"
 
 
 def main() -> None:
@@ -78,7 +81,8 @@ def main() -> None:
         f"load before: {os.getloadavg()[0]:.2f}; {args.config}: {plan.num_cars} cars, "
         f"{plan.rl_rows.size} RL, horizon {plan.horizon} + warm-up {plan.warmup}"
     )
-    print("| rings | reset s | rings steps/s | +wrappers | +predict | learn (TRPO) |")
+    print("env-steps/s of wall time (and per CPU-second of this process)")
+    print("| rings | reset s | rings | +wrappers | +predict | learn (TRPO) |")
     print("|---:|---:|---:|---:|---:|---:|")
     for b in args.rings:
         steps = max(50, min(args.steps, args.steps * 64 // b))
@@ -102,15 +106,13 @@ def main() -> None:
             last[0] = v.step(action)[0]
 
         pred = rate(predict, b, steps)
-        learn = float("nan")
+        learn = "-"
         if args.learn:
-            start = time.perf_counter()
+            start, cpu = time.perf_counter(), time.process_time()
             model.learn(args.learn)
-            learn = model.num_timesteps / (time.perf_counter() - start)
-        print(
-            f"| {b} | {reset_s:.2f} | {raw:,.0f} | {wrap:,.0f} | {pred:,.0f} | {learn:,.0f} |",
-            flush=True,
-        )
+            wall, used = time.perf_counter() - start, time.process_time() - cpu
+            learn = f"{model.num_timesteps / wall:,.0f} ({model.num_timesteps / used:,.0f})"
+        print(f"| {b} | {reset_s:.2f} | {raw} | {wrap} | {pred} | {learn} |", flush=True)
     print(f"load after: {os.getloadavg()[0]:.2f}")
 
 
