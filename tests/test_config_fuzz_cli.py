@@ -125,6 +125,27 @@ def test_paths_that_are_not_config_files(app: typer.Typer, tmp_path: Path) -> No
         ("env.additional_params.max_accel=[1]", "> 0"),
     ],
 )
+@pytest.mark.parametrize(
+    ("config", "override", "expected"),
+    [
+        ("merge", "network.inflows[0].depart_lane=-1", "at least 0"),
+        ("merge", "network.inflows[0].depart_lane=5", "has 1 lane(s)"),
+        ("merge", "network.inflows[0].depart_speed=warp", "unknown departure speed"),
+        ("ring_wave", "train.policy_kwargs.log_std_init=[1]", "expected a number"),
+        ("ring_wave", "train.policy_kwargs.net_arch=[64, .nan]", "finite"),
+        ("rllib_ring", "train.num_env_runners=-1", ">= 0"),
+    ],
+)
+def test_values_found_by_the_fuzz_are_refused(
+    app: typer.Typer, config: str, override: str, expected: str
+) -> None:
+    path = next(p for p in SHIPPED if p.stem == config)
+    code, output = invoke(app, str(path), "--set", override)
+    assert code == 1
+    assert_one_error_line(output, "--set")
+    assert expected in output
+
+
 def test_bad_set_paths_and_values_are_one_line_at_set(
     app: typer.Typer, override: str, expected: str
 ) -> None:

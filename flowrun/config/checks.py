@@ -201,6 +201,18 @@ def _depart_speed(value: Any) -> str | None:
     return at_least(0, high=MAX_SPEED, unit=" m/s")(value)
 
 
+#: SUMO's ``departLane`` keywords.
+DEPART_LANES = ("first", "random", "free", "allowed", "best")
+
+
+def _depart_lane(value: Any) -> str | None:
+    if isinstance(value, str):
+        if value in DEPART_LANES:
+            return None
+        return f"{one_of('departure lane', DEPART_LANES)(value)} (or a lane index >= 0)"
+    return at_least(0)(value)
+
+
 def _vehicle_id(value: Any) -> str | None:
     if not value:
         return "must not be empty"
@@ -301,6 +313,7 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (InFlow, "number"): at_least(1, high=MAX_VEHICLES),
     (InFlow, "end"): at_least(0, high=1e9),
     (InFlow, "depart_speed"): _depart_speed,
+    (InFlow, "depart_lane"): _depart_lane,
     (InFlow, "name"): _vehicle_id,
     (TrainConfig, "algorithm"): one_of("algorithm", ALGORITHMS),
     (TrainConfig, "total_timesteps"): at_least(1, high=1e13),

@@ -67,6 +67,21 @@ def check_experiment(cfg: ExperimentConfig, network: Any, loc: Locations) -> Non
     _check_network_inputs(cfg, network, loc)
     _check_step(cfg, network, loc)
     _check_start(cfg, network, loc)
+    _check_inflow_lanes(cfg, network, loc)
+
+
+def _check_inflow_lanes(cfg: ExperimentConfig, network: Any, loc: Locations) -> None:
+    """A lane index an inflow departs on exists on its edge (SUMO refuses it otherwise)."""
+    lanes = {e.id: e.lanes for e in network.spec.edges}
+    inflows = cfg.network.net_params.inflows
+    for j, flow in enumerate(inflows.get() if inflows is not None else []):
+        lane = flow.depart_lane
+        if isinstance(lane, int) and flow.edge in lanes and lane >= lanes[flow.edge]:
+            raise loc.error(
+                f"edge '{flow.edge}' has {lanes[flow.edge]} lane(s), numbered from 0; "
+                f"got lane {lane}",
+                ("network", "inflows", j, "depart_lane"),
+            )
 
 
 #: Flow's environment parameters whose meaning is known whatever the env: must be > 0.
@@ -246,6 +261,11 @@ def _check_train_values(cfg: ExperimentConfig, loc: Locations) -> None:
         value = getattr(train, f.name)
         if isinstance(value, dict):
             _finite_numbers(value, ("train", f.name), loc)
+    log_std = train.policy_kwargs.get("log_std_init")
+    if log_std is not None and (isinstance(log_std, bool) or not isinstance(log_std, int | float)):
+        raise loc.error(
+            f"expected a number, got {log_std!r}", ("train", "policy_kwargs", "log_std_init")
+        )
     arch = train.policy_kwargs.get("net_arch")
     layers = list(arch.values()) if isinstance(arch, dict) else [arch]
     for layer in layers:

@@ -65,6 +65,22 @@ def preflight(cfg: ExperimentConfig, loc: Locations) -> None:
     if cfg.train is not None:
         _check_rl_vehicles(cfg, cls, loc)
         _check_hyperparam_names(cfg, loc)
+        _check_rllib(cfg, loc)
+
+
+def _check_rllib(cfg: ExperimentConfig, loc: Locations) -> None:
+    """The RLlib backend's own check of ``train:`` (what ``train`` runs before it starts)."""
+    if cfg.train is None or cfg.train.backend != "rllib":
+        return
+    check = optional("flowrun.training.rllib.options", "check_train_config")
+    if check is None:
+        return
+    try:
+        check(cfg.train)
+    except ConfigError as err:
+        raise _relocated(err, loc) from None
+    except (TrainingError, ModuleNotFoundError):
+        return  # Ray is not installed: train says how to install it
 
 
 def _relocated(err: ConfigError, loc: Locations) -> ConfigError:
