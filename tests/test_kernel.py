@@ -300,3 +300,42 @@ def test_frames_completed_in_batches_equal_frames_read_step_by_step(
             assert getattr(a, column).tolist() == getattr(b, column).tolist(), column
         assert np.abs(a.x - b.x).max() < 1e-9 and np.abs(a.y - b.y).max() < 1e-9
     assert {e for f in batched for e in f.edges} == {"bottom", "right", "top", "left"}
+
+
+@pytest.mark.sumo
+def test_ring_cars_without_continuous_router_leave_at_their_routes_end_as_in_flow(
+    tmp_path: Path,
+) -> None:
+    # Flow: a car whose route ends leaves the network; the ring shortcuts assume nobody
+    # leaves, so such a ring runs on the general path (and is logged like any network).
+    from flowrun.config.params import (
+        EnvParams,
+        InitialConfig,
+        NetParams,
+        SumoCarFollowingParams,
+        SumoParams,
+        VehicleParams,
+    )
+    from flowrun.controllers import SimCarFollowingController
+    from flowrun.envs import TestEnv
+    from flowrun.networks.ring import RingNetwork
+
+    vehicles = VehicleParams()
+    vehicles.add("u", acceleration_controller=(SimCarFollowingController, {}),
+                 routing_controller=None, num_vehicles=4,
+                 car_following_params=SumoCarFollowingParams(max_speed=12))  # fmt: skip
+    params = {"length": 230, "lanes": 1, "speed_limit": 30, "resolution": 40}
+    net = RingNetwork("r", vehicles, NetParams(additional_params=params), InitialConfig())
+    env = TestEnv(EnvParams(horizon=400), SumoParams(sim_step=0.1), net)
+
+    def sink(run: int) -> McapRecorder:
+        return McapRecorder(tmp_path / f"run_{run}.mcap", metadata={}, attachments={})
+
+    try:
+        Experiment(env, sink_factory=sink).run(1, 400)
+        assert env.k.vehicle.num_vehicles == 0
+    finally:
+        env.close()
+    counts = [len(f.ids) for f in open_log(tmp_path / "run_0.mcap").frames()]
+    assert counts[0] == 4 and counts[-1] == 0
+    assert counts == sorted(counts, reverse=True)  # they leave one by one, nobody returns

@@ -43,6 +43,7 @@ from flowrun.kernel import Kernel
 from flowrun.kernel.geometry import RingPlacement
 from flowrun.kernel.network import NetworkKernel
 from flowrun.kernel.sumo import gui_available
+from flowrun.kernel.vehicle import ring_fast_path
 from flowrun.networks.base import Network
 from flowrun.utils.spaces import ActionClipper
 
@@ -230,7 +231,7 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         # Recording on a ring: edges, lane positions, x/y (from the lane shapes, not a getter
         # per car and step) and realised accelerations of the logged frames are derived for
         # a whole batch of steps at once (take_records).
-        closed = self.network.spec.closed
+        closed = ring_fast_path(self.network.spec, table)
         self.k.reset(
             self.network,
             table,

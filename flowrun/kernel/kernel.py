@@ -16,7 +16,7 @@ from flowrun.kernel.population import VehicleTable
 from flowrun.kernel.simulation import SimulationKernel
 from flowrun.kernel.sumo import SumoFiles, SumoProcess
 from flowrun.kernel.traffic_light import TrafficLightKernel
-from flowrun.kernel.vehicle import OpenVehicleKernel, VehicleKernel
+from flowrun.kernel.vehicle import OpenVehicleKernel, VehicleKernel, ring_fast_path
 from flowrun.networks.base import Network
 from flowrun.networks.build import build_network
 from flowrun.networks.routes import route_name, routes_xml
@@ -87,9 +87,10 @@ class Kernel:
         except Exception:
             self.close()
             raise
-        lanes = None if spec.closed else LaneTable.read(api, spec)
+        ring = ring_fast_path(spec, table)
+        lanes = None if ring else LaneTable.read(api, spec)
         self.network = NetworkKernel(spec, lanes, network)
-        kernel_class = VehicleKernel if spec.closed else OpenVehicleKernel
+        kernel_class = VehicleKernel if ring else OpenVehicleKernel
         self.vehicle = kernel_class(table, spec, self.sim_params.sim_step, rng)
         self.vehicle.read_xy = read_xy
         self.vehicle.attach(api, lanes)

@@ -42,6 +42,13 @@ _XY = frozenset(("x", "y"))
 _PLACE_AND_FOLLOWING = _FOLLOWING | _PLACE | _XY
 
 
+def ring_fast_path(spec: NetworkSpec, initial: VehicleTable) -> bool:
+    """Whether the closed-ring shortcuts hold: a ring whose cars all circle forever
+    (``ContinuousRouter``), so nobody enters or leaves. A car without it leaves the ring at
+    its route's end, as in Flow, and the general path follows it."""
+    return spec.closed and all(initial.classes[g].continuous for g in set(initial.group.tolist()))
+
+
 class VehicleKernel(VehicleCommands, FlowVehicleGetters):
     """Flow's ``k.vehicle``: per-step vehicle state and commands.
 
@@ -79,7 +86,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self.rng = rng if rng is not None else np.random.default_rng(0)
         self.api: Any = None
         self.read_xy = True
-        self.ring_path = spec.closed
+        self.ring_path = ring_fast_path(spec, initial)
         n = initial.size
         self._all = slice(0, n)
         self._edges_cache: list[str] | None = [""] * n
