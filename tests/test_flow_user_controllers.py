@@ -191,6 +191,7 @@ def test_flow_style_router_keeps_cars_on_the_ring() -> None:
         # every car got a second lap appended on its first route's last edge
         assert all(len(env.k.vehicle.get_route(v)) > 4 for v in env.k.vehicle.get_ids())
         assert isinstance(env.k.vehicle.get_routing_controller("u_0"), KeepCircling)
+        assert env.k.vehicle.get_routing_controller("u_3").veh_id == "u_3"
         own = env.k.vehicle.controllers.routing(0, "u_2")
         assert isinstance(own, KeepCircling) and own.veh_id == "u_2"
         assert own is env.k.vehicle.controllers.routing(0, "u_2")
@@ -218,6 +219,7 @@ def test_flow_style_lane_changer_moves_cars_left() -> None:
         assert sorted(env.k.vehicle.get_controlled_lc_ids()) == [f"u_{i}" for i in range(4)]
         own = env.k.vehicle.controllers.lane_changing(0, "u_1")  # the vehicle's own object
         assert isinstance(own, GoLeft) and own.veh_id == "u_1"
+        assert env.k.vehicle.get_lane_changing_controller("u_1") is own
     finally:
         env.close()
 

@@ -110,12 +110,13 @@ class FlowVehicleGetters:
         return self._require_controllers().acceleration(veh_id, self._group_of(veh_id))
 
     def get_lane_changing_controller(self, veh_id: str) -> Any:
-        """The lane-change controller of the vehicle's group."""
-        return self._require_controllers().lane_changing(self._group_of(veh_id))
+        """The lane-change controller of the vehicle's group (its own for a Flow-style class)."""
+        return self._require_controllers().lane_changing(self._group_of(veh_id), veh_id)
 
     def get_routing_controller(self, veh_id: str) -> Any:
-        """The routing controller of the vehicle's group (``None`` without one)."""
-        return self._require_controllers().routing(self._group_of(veh_id))
+        """The routing controller of the vehicle's group (``None`` without one; its own for a
+        Flow-style class)."""
+        return self._require_controllers().routing(self._group_of(veh_id), veh_id)
 
     def _group_of(self, veh_id: str) -> int:
         return int(self.table.group[self.table.row(veh_id)])
