@@ -34,9 +34,7 @@ def partial_observation(v_av: Any, v_lead: Any, gap: Any, max_length: float) -> 
 
     Scalars give a vector of 3; arrays of ``B`` rings give ``(3, B)`` (the numpy backend).
     """
-    return np.array(
-        [v_av / V_OBS_SCALE, (v_lead - v_av) / V_OBS_SCALE, gap / max_length]
-    )
+    return np.array([v_av / V_OBS_SCALE, (v_lead - v_av) / V_OBS_SCALE, gap / max_length])
 
 
 def ring_bounds(additional_params: dict[str, Any]) -> tuple[int, int] | None:
