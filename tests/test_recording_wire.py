@@ -150,10 +150,16 @@ def test_string_cache_stays_bounded_and_correct_with_endless_new_ids() -> None:
         StepStats(1, 0.1, 22, 5.5, 0.5, 6.0, 1.25, math.nan, 0, 0),
         StepStats(2**33, 1e6, 2200, math.inf, -math.inf, 1.0, 0.0, -3.5, 2, 300),
         StepStats(5, 0.5, 0, math.nan, math.nan, math.nan, math.nan, 0.0, 0, 1),
+        StepStats(7, 0.7, 40, 20.0, 1.0, 30.0, 3.0, 0.0, 0, 0, 3, 2, lane_changes=5),
     ],
 )
 def test_stats_bytes_equal_the_protobuf_library(stats: StepStats) -> None:
     assert schema.encode_stats(stats) == library_stats_bytes(stats)
+
+
+def test_lane_changes_survive_a_round_trip() -> None:
+    stats = StepStats(7, 0.7, 40, 20.0, 1.0, 30.0, 3.0, 0.0, 0, 0, 3, 2, lane_changes=5)
+    assert schema.decode_stats(schema.encode_stats(stats)).lane_changes == 5
 
 
 def test_stats_of_a_run_equal_the_protobuf_library() -> None:

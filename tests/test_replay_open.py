@@ -278,3 +278,22 @@ def test_plot_stride_counts_the_cars_of_every_step(
     first = len(next(log.frames()).ids)
     monkeypatch.setattr(plots, "MAX_POINTS", 100)
     assert plots.plot_stride(log) == math.ceil(points / 100) > math.ceil(300 * first / 100)
+
+
+@pytest.mark.sumo
+def test_lane_changes_are_counted_in_metrics_the_log_and_the_summary(tmp_path: Path) -> None:
+    from flowrun.cli.main import app
+    from flowrun.replay.summary import summarize
+
+    config = Path(__file__).resolve().parent.parent / "configs" / "highway_lane_change.yaml"
+    result = CliRunner().invoke(
+        app, ["baseline", str(config), "--set", "env.horizon=300", "--out", str(tmp_path)]
+    )
+    assert result.exit_code == 0, result.output
+    run_dir = next(tmp_path.glob("highway_lane_change/*"))
+    metrics = json.loads((run_dir / "metrics.json").read_text())
+    counted = metrics["runs"][0]["lane_changes"]
+    assert counted > 0
+    log = open_log(run_dir / "run_0.mcap")
+    assert sum(s.lane_changes for s in log.stats()) == counted
+    assert summarize(log).lane_changes == counted

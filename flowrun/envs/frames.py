@@ -138,6 +138,8 @@ class StepRecord:
         departed: vehicles that entered the network in this step.
         arrived: vehicles that left the network in this step.
         signals: the traffic lights' states when recording on a network with lights.
+        lane_changes: cars that changed lane in this step (multi-lane networks; same edge,
+            another lane).
     """
 
     step: int
@@ -151,6 +153,7 @@ class StepRecord:
     departed: int = 0
     arrived: int = 0
     signals: SignalFrame | None = None
+    lane_changes: int = 0
 
 
 def step_record(k: Kernel, step: int, with_frame: bool, deferred: bool = False) -> StepRecord:
@@ -163,6 +166,7 @@ def step_record(k: Kernel, step: int, with_frame: bool, deferred: bool = False) 
         step, sim.time, vk.speed, sim.step_collisions, sim.step_teleports, frame, math.nan, prev,
         len(vk.departed_ids), len(vk.arrived_ids),
         snapshot_signals(k, step) if with_frame else None,
+        len(vk.lane_change_log().changed) if vk.multi_lane else 0,
     )  # fmt: skip
 
 
@@ -182,6 +186,7 @@ class StatsBatch:
     teleports: IntArray
     departed: IntArray
     arrived: IntArray
+    lane_changes: IntArray
 
     def __len__(self) -> int:
         return int(self.step.size)
@@ -191,7 +196,7 @@ class StatsBatch:
         columns = (
             self.step, self.time, self.num_vehicles, self.mean_speed, self.min_speed,
             self.max_speed, self.speed_std, self.reward, self.collisions, self.teleports,
-            self.departed, self.arrived,
+            self.departed, self.arrived, self.lane_changes,
         )  # fmt: skip
         return [StepStats(*row) for row in zip(*(c.tolist() for c in columns), strict=True)]
 
@@ -220,6 +225,7 @@ def batch_stats(records: list[StepRecord]) -> StatsBatch:
         np.array([r.teleports for r in records], dtype=np.int64),
         np.array([r.departed for r in records], dtype=np.int64),
         np.array([r.arrived for r in records], dtype=np.int64),
+        np.array([r.lane_changes for r in records], dtype=np.int64),
     )
 
 

@@ -33,6 +33,8 @@ class RunMetrics:
         departed: vehicles that entered the network during the run (inflows; the cars placed
             at the start are not counted).
         arrived: vehicles that left the network during the run.
+        lane_changes: lane changes of all cars during the run (same edge, another lane; 0 on
+            single-lane networks).
     """
 
     run: int
@@ -49,6 +51,7 @@ class RunMetrics:
     teleports: int
     departed: int = 0
     arrived: int = 0
+    lane_changes: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict for ``metrics.json``."""
@@ -73,6 +76,7 @@ class RunAccumulator:
         self.teleports = 0
         self.departed = 0
         self.arrived = 0
+        self.lane_changes = 0
 
     def add_batch(self, batch: StatsBatch) -> None:
         """Fold in the statistics of consecutive steps."""
@@ -88,6 +92,7 @@ class RunAccumulator:
         self.teleports += int(batch.teleports.sum())
         self.departed += int(batch.departed.sum())
         self.arrived += int(batch.arrived.sum())
+        self.lane_changes += int(batch.lane_changes.sum())
 
     def result(self, run: int, episode_return: float) -> RunMetrics:
         """The metrics of everything added so far."""
@@ -112,6 +117,7 @@ class RunAccumulator:
             teleports=self.teleports,
             departed=self.departed,
             arrived=self.arrived,
+            lane_changes=self.lane_changes,
         )
 
 

@@ -238,6 +238,11 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             self.tailway = self.follower_headway
 
     @property
+    def multi_lane(self) -> bool:
+        """Whether any edge of the network has more than one lane."""
+        return self._multi_lane
+
+    @property
     def odometer(self) -> np.ndarray:
         """Distance every car has driven since it entered, m (SUMO's ``getDistance``)."""
         if self._odometer is None:

@@ -86,6 +86,8 @@ class StepStats:
             step's own when every step is logged; 0 in logs written before flowrun logged it).
         arrived: vehicles that left the network (end of route, or removed) since the previous
             logged step.
+        lane_changes: cars that changed lane (same edge, another lane) since the previous
+            logged step (0 on single-lane networks and in logs written before it was logged).
     """
 
     step: int
@@ -100,6 +102,7 @@ class StepStats:
     teleports: int
     departed: int = 0
     arrived: int = 0
+    lane_changes: int = 0
 
 
 @dataclass(slots=True)

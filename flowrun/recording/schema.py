@@ -85,6 +85,8 @@ _STATS_FIELDS: tuple[tuple[str, int, bool], ...] = (
     # Added for open networks; older logs leave them out and read back as 0.
     ("departed", _F.TYPE_UINT32, False),
     ("arrived", _F.TYPE_UINT32, False),
+    # Added for lane changes on open roads; older logs read back as 0.
+    ("lane_changes", _F.TYPE_UINT32, False),
 )
 SIGNAL_FIELDS: tuple[tuple[str, int, bool], ...] = (
     ("step", _F.TYPE_UINT64, False),
@@ -146,6 +148,7 @@ _FLOAT_KEYS = tuple(_VK[name] for name in FLOAT_COLUMNS)
 _STEP_KEY, _TIME_KEY, _ROSTER_KEY = _VK["step"], _VK["time"][0], _VK["roster_version"]
 _NUM_VEHICLES_KEY, _COLLISIONS_KEY = _SK["num_vehicles"], _SK["collisions"]
 _TELEPORTS_KEY, _DEPARTED_KEY, _ARRIVED_KEY = _SK["teleports"], _SK["departed"], _SK["arrived"]
+_LANE_CHANGES_KEY = _SK["lane_changes"]
 _KEYED_DOUBLE = struct.Struct("<Bd").pack
 _STATS_DOUBLES = struct.Struct("<" + "Bd" * 5).pack  # mean/min/max/std speed, reward
 _STATS_DOUBLE_KEYS = tuple(
@@ -273,6 +276,7 @@ def encode_stats(stats: StepStats) -> bytes:
             _TELEPORTS_KEY + wire.varint(teleports) if teleports else b"",
             _DEPARTED_KEY + wire.varint(s.departed) if s.departed else b"",
             _ARRIVED_KEY + wire.varint(s.arrived) if s.arrived else b"",
+            _LANE_CHANGES_KEY + wire.varint(s.lane_changes) if s.lane_changes else b"",
         )
     )
 
@@ -340,4 +344,5 @@ def decode_stats(data: bytes) -> StepStats:
         teleports=int(msg.teleports),
         departed=int(msg.departed),
         arrived=int(msg.arrived),
+        lane_changes=int(msg.lane_changes),
     )

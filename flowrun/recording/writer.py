@@ -98,7 +98,8 @@ class McapRecorder:
         self._signal_encoder = SignalEncoder()
         self._signals: int | None = None  # channel id, registered with the first SignalFrame
         self._schema_bytes = b""
-        self._departed = self._arrived = 0  # of steps thinned out since the last logged one
+        # of steps thinned out since the last logged one
+        self._departed = self._arrived = self._lane_changes = 0
         self._closed = False
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -163,14 +164,16 @@ class McapRecorder:
             # entries and exits of a thinned-out step count towards the next logged one
             self._departed += stats.departed
             self._arrived += stats.arrived
+            self._lane_changes += stats.lane_changes
             return False
-        if self._departed or self._arrived:
+        if self._departed or self._arrived or self._lane_changes:
             stats = replace(
                 stats,
                 departed=stats.departed + self._departed,
                 arrived=stats.arrived + self._arrived,
+                lane_changes=stats.lane_changes + self._lane_changes,
             )
-            self._departed = self._arrived = 0
+            self._departed = self._arrived = self._lane_changes = 0
         stamp = to_ns(frame.time)
         seq = step & 0xFFFFFFFF
         # The kernel passes the same roster objects while the roster holds: check identity

@@ -46,6 +46,7 @@ class ReplaySummary:
         recovered_bytes: bytes of the file that were usable.
         departed: vehicles that entered the network over the logged steps (inflows).
         arrived: vehicles that left the network over the logged steps.
+        lane_changes: lane changes over the logged steps (shown when there were any).
         outflow: ``arrived`` per hour of ``duration_s``, veh/h (``nan`` for an empty log).
         open_network: whether cars may enter and leave (not a ring): shows the three above.
         damage: what the log lost, one line (``""`` when intact; see
@@ -77,6 +78,7 @@ class ReplaySummary:
     outflow: float = math.nan
     open_network: bool = False
     damage: str = ""
+    lane_changes: int = 0
 
 
 def _positive_int(text: str | None) -> int:
@@ -174,6 +176,7 @@ def summarize(
         outflow=arrived * 3600.0 / duration if duration > 0 else math.nan,
         open_network=meta.get("network_closed") == "false" or departed + arrived > 0,
         damage=_damage(log),
+        lane_changes=sum(st.lane_changes for st in stats),
     )
 
 
@@ -226,6 +229,8 @@ def summary_rows(s: ReplaySummary) -> dict[str, str]:
         rows["vehicles entered"] = str(s.departed)
         rows["vehicles left"] = str(s.arrived)
         rows["outflow"] = _num(s.outflow, " veh/h", 0)
+    if s.lane_changes:
+        rows["lane changes"] = str(s.lane_changes)
     if s.salvaged:
         rows["salvaged"] = f"yes ({s.recovered_bytes} bytes recovered)"
     if s.damage:
@@ -245,6 +250,7 @@ _NUMERIC = {
     "vehicles entered": "departed",
     "vehicles left": "arrived",
     "outflow": "outflow",
+    "lane changes": "lane_changes",
 }
 
 
