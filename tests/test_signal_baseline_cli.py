@@ -4,6 +4,7 @@ metrics in the run table and metrics.json (real SUMO, short and seeded)."""
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -86,3 +87,19 @@ def test_unknown_controller_is_one_line_and_exit_1(tmp_path: Path) -> None:
         "--set", "traffic_lights.controller=maxpressure"])  # fmt: skip
     assert out.exit_code == 1
     assert "did you mean 'max_pressure'" in out.output
+
+
+def test_signal_table_shows_a_dash_for_what_could_not_be_measured() -> None:
+    from types import SimpleNamespace
+
+    from rich.console import Console
+
+    from flowrun.cli.commands_run import signals_table
+
+    row = SimpleNamespace(mean_delay=3.5, mean_travel_time=math.nan, throughput=0.0,
+                          mean_queue=0.0, waiting_at_end=0)  # fmt: skip
+    console = Console(width=120, record=True)
+    console.print(signals_table("t", [row]))
+    text = console.export_text()
+    assert "nan" not in text and "3.5 s" in text and "0 veh/h" in text
+    assert "│                - │" in text  # the travel time column

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 from typing import Annotated, Any
@@ -80,10 +81,18 @@ def signals_table(title: str, rows: list[Any]) -> Table:
                 "waiting at end"):  # fmt: skip
         table.add_column(col, justify="right")
     for i, m in enumerate(rows):
-        table.add_row(str(i), f"{m.mean_delay:.1f} s", f"{m.mean_travel_time:.1f} s",
-                      f"{m.throughput:.0f} veh/h", f"{m.mean_queue:.2f} veh",
+        table.add_row(str(i), _value(m.mean_delay, ".1f", " s"),
+                      _value(m.mean_travel_time, ".1f", " s"),
+                      _value(m.throughput, ".0f", " veh/h"), _value(m.mean_queue, ".2f", " veh"),
                       str(m.waiting_at_end))  # fmt: skip
     return table
+
+
+def _value(x: float | None, spec: str, unit: str) -> str:
+    """A number with its unit, or "-" when it could not be measured (e.g. no car finished)."""
+    if x is None or not math.isfinite(x):
+        return "-"
+    return f"{x:{spec}}{unit}"
 
 
 @guarded
