@@ -70,7 +70,7 @@ def test_resume_keeps_monitor_files_evaluations_and_the_best_model(stopped_run: 
 
     history_path = stopped_run / EVAL_LOG / EVALUATIONS
     history = EvalHistory.load(history_path)
-    history.add(512, [])  # placeholder row replaced below: a best score no model can beat
+    history.add(512, [], 1e9)  # a best score no model can beat (rows filled below)
     history.results[-1] = [1e9]
     history.ep_lengths[-1] = [150]
     history.last_half_speed[-1] = [99.0]

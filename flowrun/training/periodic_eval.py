@@ -4,7 +4,8 @@ Each evaluation rolls the current deterministic policy out for the same seeded e
 this process (the training envs run in subprocesses, so this process has no other SUMO), with
 a numpy copy of the policy network (a few microseconds a step instead of SB3's ~100-250 µs
 ``predict``). Scores are the episode returns in evaluation mode (Flow's ``env.evaluate``:
-the mean speed for the ring envs).
+the mean speed for the ring envs); the best model is the one whose last-half mean speed is
+highest relative to the all-human baseline of the same episodes (:meth:`EpisodeRunner.score`).
 
 The history lives in ``eval_log/evaluations.npz`` (SB3's ``EvalCallback`` format: ``timesteps``,
 ``results``, ``ep_lengths``, plus ``last_half_speed``); a resumed run continues it and keeps
@@ -25,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from flowrun.config.model import ExperimentConfig
-from flowrun.errors import TrainingError
+from flowrun.errors import ConfigError, TrainingError
 from flowrun.training.deps import require
 
 if TYPE_CHECKING:
@@ -139,9 +140,36 @@ class EpisodeRunner:
         """
         from flowrun.envs.factory import make_env
 
-        self.env = make_env(cfg)
         self.seeds = tuple(seeds)
         self.should_stop = should_stop
+        self.baseline = self._baseline(cfg)
+        self.env = make_env(cfg)  # after the baseline's env is closed: one SUMO a process
+
+    def _baseline(self, cfg: ExperimentConfig) -> list[float]:
+        """Last-half mean speed of each seed's episode with the AVs driven like the humans."""
+        from flowrun.envs.factory import make_env
+        from flowrun.training.evaluate import all_human
+
+        try:
+            human = all_human(cfg)
+        except ConfigError:  # no human group to copy: scores fall back to returns
+            return [math.nan] * len(self.seeds)
+        env = make_env(human)
+        try:
+            runs = [_episode(env, seed, None, None) for seed in self.seeds]
+            return [math.nan if r is None else r.last_half_speed for r in runs]
+        finally:
+            env.close()
+
+    def score(self, scores: Sequence[EpisodeScore]) -> float:
+        """What picks the best model: the mean over episodes of the last-half mean speed as a
+        fraction of the all-human baseline's on the same seed (rings of different lengths
+        then count alike; raw speeds would favour the long rings). The mean return when
+        the env reports no speeds."""
+        ratios = [s.last_half_speed / b for s, b in zip(scores, self.baseline, strict=True)]
+        if all(math.isfinite(r) for r in ratios) and all(b > 0 for b in self.baseline):
+            return float(np.mean(ratios))
+        return float(np.mean([s.episode_return for s in scores]))
 
     def run(
         self, act: Act, normalize: Callable[[np.ndarray], np.ndarray] | None
@@ -150,27 +178,43 @@ class EpisodeRunner:
 
         Returns ``None`` when ``should_stop`` became true on the way.
         """
-        stop = self.should_stop
         scores = []
         for seed in self.seeds:
-            obs, _ = self.env.reset(seed=seed)
-            total, speeds, done = 0.0, [], False
-            while not done:
-                if stop is not None and stop():
-                    return None
-                x = np.asarray(obs, dtype=np.float32)
-                action = act(normalize(x[None])[0] if normalize is not None else x)
-                obs, reward, terminated, truncated, info = self.env.step(action)
-                total += float(reward)
-                speeds.append(float(info.get("mean_speed", math.nan)))
-                done = terminated or truncated
-            half = speeds[len(speeds) // 2 :]
-            scores.append(EpisodeScore(total, len(speeds), float(np.mean(half))))
+            score = _episode(self.env, seed, act, normalize, self.should_stop)
+            if score is None:
+                return None
+            scores.append(score)
         return scores
 
     def close(self) -> None:
         """Stop the env's simulation (idempotent)."""
         self.env.close()
+
+
+def _episode(
+    env: Any,
+    seed: int,
+    act: Act | None,
+    normalize: Callable[[np.ndarray], np.ndarray] | None,
+    stop: Callable[[], bool] | None = None,
+) -> EpisodeScore | None:
+    """One episode reset with ``seed``; ``act`` ``None`` sends no RL action. ``None`` when
+    ``stop()`` became true on the way."""
+    obs, _ = env.reset(seed=seed)
+    total, speeds, done = 0.0, [], False
+    while not done:
+        if stop is not None and stop():
+            return None
+        action = None
+        if act is not None:
+            x = np.asarray(obs, dtype=np.float32)
+            action = act(normalize(x[None])[0] if normalize is not None else x)
+        obs, reward, terminated, truncated, info = env.step(action)
+        total += float(reward)
+        speeds.append(float(info.get("mean_speed", math.nan)))
+        done = terminated or truncated
+    half = speeds[len(speeds) // 2 :]
+    return EpisodeScore(total, len(speeds), float(np.mean(half)))
 
 
 @dataclass
@@ -181,14 +225,16 @@ class EvalHistory:
     results: list[list[float]] = field(default_factory=list)
     ep_lengths: list[list[int]] = field(default_factory=list)
     last_half_speed: list[list[float]] = field(default_factory=list)
+    score: list[float] = field(default_factory=list)
 
     @property
     def best(self) -> float:
-        """The best mean return so far (``-inf`` before the first evaluation)."""
-        return max((float(np.mean(r)) for r in self.results), default=-math.inf)
+        """The best score so far (``-inf`` before the first evaluation)."""
+        return max(self.score, default=-math.inf)
 
-    def add(self, timesteps: int, scores: Sequence[EpisodeScore]) -> None:
-        """Append one evaluation."""
+    def add(self, timesteps: int, scores: Sequence[EpisodeScore], score: float) -> None:
+        """Append one evaluation with the score that ranks it."""
+        self.score.append(score)
         self.timesteps.append(timesteps)
         self.results.append([s.episode_return for s in scores])
         self.ep_lengths.append([s.length for s in scores])
@@ -214,8 +260,12 @@ class EvalHistory:
                 speeds = data["last_half_speed"].tolist()
             else:  # written by SB3's EvalCallback
                 speeds = [[math.nan] * len(r) for r in results]
+            # SB3's files ranked by mean return (much larger than a speed ratio: kept best)
+            score = data["score"].tolist() if "score" in data else [float(np.mean(r))
+                                                                     for r in results]
             return cls(
-                [int(t) for t in data["timesteps"]], results, data["ep_lengths"].tolist(), speeds
+                [int(t) for t in data["timesteps"]], results, data["ep_lengths"].tolist(), speeds,
+                score,
             )
 
     def save(self, path: Path) -> None:
@@ -228,6 +278,7 @@ class EvalHistory:
             results=np.asarray(self.results, dtype=np.float64),
             ep_lengths=np.asarray(self.ep_lengths, dtype=np.int64),
             last_half_speed=np.asarray(self.last_half_speed, dtype=np.float64),
+            score=np.asarray(self.score, dtype=np.float64),
         )
         tmp.replace(path)
 
@@ -275,10 +326,11 @@ def make_periodic_eval_callback(
             if scores is None:
                 return False  # asked to stop
             previous_best = history.best
-            history.add(int(self.num_timesteps), scores)
-            mean = float(np.mean([s.episode_return for s in scores]))
-            self.logger.record("eval/mean_reward", mean)
+            mean = runner.score(scores)
+            history.add(int(self.num_timesteps), scores, mean)
+            self.logger.record("eval/mean_reward", float(np.mean(history.results[-1])))
             self.logger.record("eval/last_half_speed", float(np.mean(history.last_half_speed[-1])))
+            self.logger.record("eval/score", mean)
             if mean <= previous_best:
                 history.save(history_path)
                 return True
