@@ -88,6 +88,25 @@ def check_reachable(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
         ) from None
 
 
+def send_token_if_available() -> None:
+    """Authenticate to the cluster with this machine's Ray token, if it has one.
+
+    Ray 2.60's ``ray start --head`` enables token authentication, but a driver attaching with
+    ``ray.init(address=...)`` sends its token (``RAY_AUTH_TOKEN``, ``RAY_AUTH_TOKEN_PATH`` or
+    ``~/.ray/auth_token``) only in token mode (measured: refused without it; a cluster
+    without authentication accepts a token-mode driver too). Ray's own helper turns token
+    mode on, only when ``RAY_AUTH_MODE`` is unset and a token exists, the way ``ray.init()``
+    does for a local cluster.
+    """
+    try:
+        from ray._private.authentication.authentication_token_setup import (
+            maybe_enable_token_auth_if_token_available,
+        )
+    except ImportError:  # another Ray release: RAY_AUTH_MODE=token does the same
+        return
+    maybe_enable_token_auth_if_token_available(warn_if_disabled=False)
+
+
 @contextmanager
 def ray_session(address: str | None = None) -> Iterator[RaySession]:
     """Attach to a Ray cluster, or start a local Ray sized to this machine, for a block.
@@ -117,11 +136,17 @@ def ray_session(address: str | None = None) -> Iterator[RaySession]:
         name = "local"
     else:
         check_reachable(chosen)
+        send_token_if_available()
         try:
             ray.init(address=chosen, logging_level=logging.WARNING)
         except (ConnectionError, RuntimeError, ValueError) as err:
-            first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
-            raise TrainingError(f"cannot attach to the Ray cluster at {chosen}: {first}") from None
+            text = str(err).strip()
+            first = text.splitlines()[0] if text else type(err).__name__
+            raise TrainingError(
+                f"cannot attach to the Ray cluster at {chosen}: {first} (a cluster started "
+                "with token authentication needs its token here: RAY_AUTH_TOKEN, or "
+                "`ray get-auth-token` on the head node saved to ~/.ray/auth_token)"
+            ) from None
         name = chosen
     try:
         cpus = float(ray.cluster_resources().get("CPU", 1.0))
