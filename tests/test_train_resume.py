@@ -153,3 +153,25 @@ def test_eval_out_and_seed(stopped_run: Path, tmp_path: Path) -> None:
     m1 = json.loads((first / "metrics.json").read_text())
     m2 = json.loads((second / "metrics.json").read_text())
     assert m1["policy"] == m2["policy"]  # same seed, same episodes
+
+
+def test_evaluation_score_is_speed_relative_to_the_all_human_baseline() -> None:
+    from dataclasses import replace
+
+    from flowrun.training.periodic_eval import EpisodeRunner
+
+    cfg = load_config(CONFIG, [*TINY, "env.horizon=200",
+                               "env.additional_params.ring_length=[220, 270]"])
+    runner_ = EpisodeRunner(replace(cfg, env=replace(cfg.env, evaluate=True)), [3, 4])
+    try:
+        assert all(b > 0 for b in runner_.baseline)
+        brake = runner_.run(lambda obs: np.array([-1.0], dtype=np.float32), None)
+        coast = runner_.run(lambda obs: np.array([0.5], dtype=np.float32), None)
+        assert brake is not None and coast is not None
+        expected = np.mean([s.last_half_speed / b for s, b in zip(coast, runner_.baseline,
+                                                                  strict=True)])
+        assert runner_.score(coast) == pytest.approx(expected)
+        assert runner_.score(brake) < runner_.score(coast)  # an AV stuck at rest is worse
+        assert runner_.run(lambda obs: np.full(1, 0.5, np.float32), None) == coast  # same seeds
+    finally:
+        runner_.close()
