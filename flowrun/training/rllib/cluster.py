@@ -129,6 +129,7 @@ def ray_session(address: str | None = None) -> Iterator[RaySession]:
     chosen = resolve_address(address)
     if chosen is None:
         ray.init(
+            address="local",  # a new instance, even where `ray start` runs a cluster
             num_cpus=os.cpu_count() or 1,
             include_dashboard=False,
             logging_level=logging.WARNING,
