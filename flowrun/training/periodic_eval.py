@@ -156,7 +156,7 @@ class EpisodeRunner:
             return [math.nan] * len(self.seeds)
         env = make_env(human)
         try:
-            runs = [_episode(env, seed, None, None) for seed in self.seeds]
+            runs = [_episode(env, seed, None, None, self.should_stop) for seed in self.seeds]
             return [math.nan if r is None else r.last_half_speed for r in runs]
         finally:
             env.close()

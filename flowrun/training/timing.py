@@ -23,7 +23,8 @@ class TrainTiming:
     """Seconds spent in each part of a training run.
 
     Attributes:
-        startup: from the call until learning starts (env subprocesses, model, eval env).
+        startup: from the call until learning starts (env subprocesses, model, eval env),
+            without the evaluation's all-human baseline episodes (counted in ``evaluation``).
         env_wait: waiting for the env subprocesses' ``step``/``reset`` results.
         rollout: collecting rollouts (env waits, policy inference, callbacks, evaluations).
         update: gradient updates (between the end of a rollout and the next one).
@@ -123,8 +124,8 @@ def timing_callback(timing: TrainTiming) -> BaseCallback:
 
         def _on_rollout_start(self) -> None:
             lap = self._lap()
-            if self.first:
-                timing.startup = self.mark - timing.started
+            if self.first:  # evaluation so far: the baseline episodes, not start-up
+                timing.startup = self.mark - timing.started - timing.evaluation
                 self.first = False
             elif self.in_update:
                 timing.update += lap

@@ -167,7 +167,9 @@ def train(
         )
         callbacks.append(timing_callback(timing))
         if tc.eval_freq > 0:
-            runner = _eval_runner(cfg, tc, seed, stop)
+            baseline = time.perf_counter()
+            runner = _eval_runner(cfg, tc, seed, stop)  # runs the all-human episodes
+            timing.evaluation += time.perf_counter() - baseline
             callbacks.append(make_periodic_eval_callback(
                 runner, run_dir, tc.eval_freq, BEST_MODEL, BEST_VECNORMALIZE, timing,
             ))
