@@ -113,14 +113,23 @@ def test_single_agent_run_folder(ring_run: Path) -> None:
     assert is_rllib_run(ring_run) and not is_rllib_run(ring_run / "tensorboard")
 
 
-def test_resume_continues_the_iteration_counter(ring_run: Path) -> None:
-    cfg = resume_config(ring_run, ["train.total_timesteps=600", "train.eval_freq=0"])
-    result = train_rllib(cfg, resume_dir=ring_run, argv=["flowrun", "train", "--resume"])
-    assert (result.status, result.timesteps, result.resumed_from) == ("complete", 600, 400)
+def test_resume_continues_the_iteration_counter_and_stops_on_request(ring_run: Path) -> None:
+    assert json.loads((ring_run / "status.json").read_text())["status"] == "complete"
+    cfg = resume_config(ring_run, ["train.total_timesteps=800", "train.eval_freq=0"])
+    result = train_rllib(
+        cfg, resume_dir=ring_run, argv=["flowrun", "train", "--resume"],
+        should_stop=lambda: True,  # as after Ctrl-C: stop after the iteration under way
+    )  # fmt: skip
+    assert (result.status, result.timesteps, result.resumed_from) == ("interrupted", 600, 400)
     progress = _lines(ring_run / "progress.jsonl")
     assert [(p["iteration"], p["timesteps"]) for p in progress] == [(1, 200), (2, 400), (3, 600)]
     metrics = json.loads((ring_run / "metrics.json").read_text())
-    assert (metrics["iterations"], metrics["resumed_from"]) == (3, 400)
+    assert (metrics["status"], metrics["iterations"], metrics["resumed_from"]) == (
+        "interrupted", 3, 400,
+    )  # fmt: skip
+    state = json.loads((ring_run / "checkpoints" / "state.json").read_text())
+    assert (state["checkpoint"], state["timesteps"]) == ("iter_000003", 600)
+    assert json.loads((ring_run / "status.json").read_text())["status"] == "interrupted"
     assert len((ring_run / "command.txt").read_text().splitlines()) == 2
     assert (ring_run / "config.before_400.yaml").is_file()  # the total changed
 
@@ -136,8 +145,10 @@ def test_evaluate_a_checkpoint_to_mcap(ring_run: Path) -> None:
     assert np.ptp(rl_accel) > 0  # ... that change with the observation
     speeds = [f.speed for f in policy.frames()]
     assert not np.allclose(speeds[-1], [f.speed for f in baseline.frames()][-1])
+    assert first.out_dir.parent == ring_run / "eval" and first.out_dir.name.endswith("-0")
     metrics = json.loads((first.out_dir / "metrics.json").read_text())
     assert metrics["backend"] == "rllib" and metrics["policy"][0]["collisions"] == 0
+    assert (metrics["status"], metrics["run_status"]) == ("complete", "interrupted")
     # deterministic policy, same seeds: the same episode again
     again = evaluate_rllib(ring_run, episodes=1, model="checkpoints/iter_000002")
     assert again.policy[0].episode_return == first.policy[0].episode_return

@@ -26,11 +26,18 @@ from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.experiment.baseline import open_run_log
 from flowrun.experiment.metrics import RunMetrics
-from flowrun.experiment.rundir import unique_dir, write_json
+from flowrun.experiment.rundir import (
+    exit_code_of,
+    mark_done,
+    mark_running,
+    unique_dir,
+    write_json,
+)
 from flowrun.experiment.runner import Experiment, FrameSink
 from flowrun.training.evaluate import EvalProgress, EvalResult, all_human, eval_config
 from flowrun.training.rllib.deps import require_ray
 from flowrun.training.rllib.train import BEST_CHECKPOINT, FINAL_CHECKPOINT
+from flowrun.training.runstate import run_state
 from flowrun.training.trainer import train_section
 
 #: Where an RLlib (new API stack) checkpoint keeps its RL modules.
@@ -139,12 +146,15 @@ def evaluate_rllib(
     config_override: Path | None = None,
     model: str = "best",
     progress: EvalProgress | None = None,
+    out: Path | None = None,
 ) -> EvalResult:
     """Roll out the RLlib policy and the all-human baseline, ``episodes`` each (as
     :func:`flowrun.training.evaluate`).
 
-    Episode ``i`` of both resets with seed ``sim.seed + i``. Writes ``metrics.json`` and the
-    MCAP logs (``policy_<i>.mcap``, ``baseline_<i>.mcap``) to ``<run>/eval/<timestamp>/``.
+    Episode ``i`` of both resets with seed ``sim.seed + i``. Writes ``metrics.json`` (``status``
+    ``running``, then ``complete`` or ``interrupted``) and the MCAP logs (``policy_<i>.mcap``,
+    ``baseline_<i>.mcap``) to ``<out>/<timestamp>-<seed>/``, ``out`` defaulting to
+    ``<run>/eval``.
 
     Args:
         run_dir: the train run folder.
@@ -154,6 +164,7 @@ def evaluate_rllib(
         config_override: a YAML whose sections override the run's config.
         model: ``best``, ``final`` or a checkpoint folder (see :func:`checkpoint_path`).
         progress: called as ``progress(label, episode, step)``.
+        out: parent of the evaluation folder (``None``: ``<run>/eval``).
 
     Raises:
         ConfigError: ``episodes`` < 1 or a bad override.
@@ -165,18 +176,32 @@ def evaluate_rllib(
     tc = train_section(cfg)
     path = checkpoint_path(run_dir, model)
     policies = load_policies(path, deterministic)
-    out_dir = unique_dir(run_dir / "eval" / datetime.now(UTC).strftime("%Y%m%d-%H%M%S"))
-    (out_dir / "config.yaml").write_text(dump_config(cfg))
+    status = run_state(run_dir)
     seed = int(cfg.sim.seed or 0)
+    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
+    out_dir = unique_dir((run_dir / "eval" if out is None else out) / f"{stamp}-{seed}")
+    (out_dir / "config.yaml").write_text(dump_config(cfg))
+    head = {"seed": seed, "deterministic": deterministic, "backend": "rllib",
+            "model": str(path), "run": str(run_dir), "run_status": status}  # fmt: skip
+    write_json(out_dir / "metrics.json", {"status": "running", **head})
+    mark_running(out_dir)
     logs: list[Path] = []
     act = _actor(cfg, run_dir, tc.policies, policies)
-    rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
-    human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs, progress)
-    result = EvalResult(out_dir, path, rl, human, logs)
-    write_json(
-        out_dir / "metrics.json",
-        {"seed": seed, "deterministic": deterministic, "backend": "rllib", **result.to_dict()},
-    )
+    try:
+        rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
+        human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs,
+                         progress)  # fmt: skip
+    except KeyboardInterrupt as err:
+        write_json(out_dir / "metrics.json",
+                   {"status": "interrupted", **head, "logs": [p.name for p in logs]})  # fmt: skip
+        mark_done(out_dir, "interrupted", exit_code=exit_code_of(err))
+        raise
+    except Exception as err:
+        mark_done(out_dir, "failed", error=f"{type(err).__name__}: {err}", exit_code=1)
+        raise
+    result = EvalResult(out_dir, path, rl, human, logs, status)
+    write_json(out_dir / "metrics.json", {"status": "complete", **head, **result.to_dict()})
+    mark_done(out_dir, "complete", exit_code=0)
     return result
 
 

@@ -19,7 +19,7 @@ import shlex
 import shutil
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -27,7 +27,13 @@ from typing import Any
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig, TrainConfig
 from flowrun.errors import TrainingError
-from flowrun.experiment.rundir import create_run_dir, write_json
+from flowrun.experiment.rundir import (
+    exit_code_of,
+    mark_done,
+    mark_running,
+    start_run,
+    write_json,
+)
 from flowrun.training.callbacks import TrainProgress
 from flowrun.training.rllib.cluster import RaySession, ray_session
 from flowrun.training.rllib.deps import require_ray
@@ -37,6 +43,7 @@ from flowrun.training.rllib.options import (
     env_runners,
     steps_per_iteration,
 )
+from flowrun.training.runstate import RunLock
 from flowrun.training.trainer import TrainResult, train_section, train_seed
 
 log = logging.getLogger(__name__)
@@ -59,6 +66,7 @@ def train_rllib(
     resume_dir: Path | None = None,
     progress: TrainProgress | None = None,
     argv: list[str] | None = None,
+    should_stop: Callable[[], bool] | None = None,
     ray_address: str | None = None,
 ) -> TrainResult:
     """Train the config's policy with RLlib's PPO and write the run folder.
@@ -74,11 +82,14 @@ def train_rllib(
             iteration and step counters continue).
         progress: called with ``(timesteps done, total, mean episode return)`` per iteration.
         argv: the command line saved in ``command.txt``.
+        should_stop: polled after every iteration; once true, a checkpoint is saved and the
+            run ends ``interrupted`` (the CLI's Ctrl-C/SIGTERM request).
         ray_address: a Ray cluster to attach to; ``None`` reads ``RAY_ADDRESS`` and without it
             starts a local Ray instance for the run.
 
     A ``KeyboardInterrupt`` saves a checkpoint, writes ``metrics.json`` with
-    ``status: interrupted`` and propagates.
+    ``status: interrupted`` and propagates. The run folder is locked while training and its
+    ``status.json`` says how the run ended, as the stable-baselines3 path's.
 
     Raises:
         ConfigError: bad ``train:`` settings (before any work).
@@ -98,13 +109,24 @@ def train_rllib(
     with ray_session(ray_address) as session:
         if resume_dir is not None and state is not None:
             run_dir = resume_dir
+            lock = RunLock(run_dir).acquire()
+            mark_running(run_dir)
             _note_resume(run_dir, cfg, state, argv)
         else:
-            run_dir = create_run_dir(out, cfg, seed, argv)
-        _add_version(run_dir, "ray", str(ray.__version__))
-        if policies is not None:
-            write_json(run_dir / "policies.json", policies)
-        return _train(run_dir, cfg, seed, sections, policies, state, session, progress)
+            run_dir = start_run(out, cfg, seed, argv)
+            lock = RunLock(run_dir).acquire()
+        try:
+            _add_version(run_dir, "ray", str(ray.__version__))
+            if policies is not None:
+                write_json(run_dir / "policies.json", policies)
+            return _train(run_dir, cfg, seed, sections, policies, state, session, progress,
+                          should_stop or _never)  # fmt: skip
+        finally:
+            lock.release()
+
+
+def _never() -> bool:
+    return False
 
 
 def _train(
@@ -116,8 +138,10 @@ def _train(
     state: dict[str, Any] | None,
     session: RaySession,
     progress: TrainProgress | None,
+    should_stop: Callable[[], bool],
 ) -> TrainResult:
-    """Build the algorithm, train, checkpoint; ``metrics.json`` whatever happens."""
+    """Build the algorithm, train, checkpoint; ``metrics.json`` and ``status.json`` whatever
+    happens."""
     from tensorboardX import SummaryWriter
 
     from flowrun.training.rllib.envs import ENV_NAME, env_config_of, register
@@ -127,7 +151,7 @@ def _train(
     ckpt_dir.mkdir(exist_ok=True)
     done = int(state["timesteps"]) if state else 0
     best = state.get("best_return") if state else None
-    status, wall, iteration = "interrupted", 0.0, 0
+    status, wall, iteration, error, exit_code = "failed", 0.0, 0, "", 1
     algo: Any = None
     try:
         register()
@@ -163,12 +187,22 @@ def _train(
                     save_checkpoint(algo, ckpt_dir, iteration, done, best)
                 if progress is not None:
                     progress(done, tc.total_timesteps, ret)
-            status = "complete"
-            _save(algo, run_dir / FINAL_CHECKPOINT)
-            save_checkpoint(algo, ckpt_dir, iteration or algo.iteration, done, best)
-        except KeyboardInterrupt:
+                if should_stop():
+                    status = "interrupted"
+                    exit_code = int(getattr(should_stop, "exit_code", 130))
+                    save_checkpoint(algo, ckpt_dir, algo.iteration, done, best)
+                    break
+            else:
+                status, exit_code = "complete", 0
+                _save(algo, run_dir / FINAL_CHECKPOINT)
+                save_checkpoint(algo, ckpt_dir, iteration or algo.iteration, done, best)
+        except KeyboardInterrupt as err:
+            status, exit_code = "interrupted", exit_code_of(err)
             path = save_checkpoint(algo, ckpt_dir, algo.iteration, done, best)
             log.info("interrupted: checkpoint saved to %s", path)
+            raise
+        except Exception as err:
+            error = f"{type(err).__name__}: {err}"
             raise
         finally:
             wall = time.monotonic() - start
@@ -178,6 +212,7 @@ def _train(
             algo.stop()
         _write_metrics(run_dir, cfg, tc, seed, status, done, wall, state, iteration, best,
                        session.address, policies)  # fmt: skip
+        mark_done(run_dir, status, error=error or None, exit_code=exit_code)
     resumed = int(state["timesteps"]) if state else 0
     return TrainResult(run_dir, done, wall, status, resumed)
 
