@@ -217,6 +217,8 @@ def test_policy_mapping_modes() -> None:
         ("train.algorithm=SAC", "trains PPO only"),
         ("train.policies=shard", "did you mean 'shared'"),
         ("train.hyperparams={n_steps: 10}", "stable-baselines3 names"),
+        ("train.policy_kwargs={net_arch: [8]}", "train.rllib.model_config"),
+        ("train.normalize=true", "VecNormalize is stable-baselines3's"),
     ],
 )
 def test_bad_settings_are_one_line_config_errors(override: str, message: str) -> None:

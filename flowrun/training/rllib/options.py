@@ -161,6 +161,18 @@ def check_train_config(tc: TrainConfig) -> dict[str, dict[str, Any]]:
             "train.rllib, by RLlib's names (lr, gamma, train_batch_size_per_learner, ...)",
             "train.hyperparams",
         )
+    if tc.policy_kwargs:
+        raise ConfigError(
+            "holds stable-baselines3 policy arguments; with backend: rllib set the network "
+            "as train.rllib.model_config (e.g. {fcnet_hiddens: [64, 64]})",
+            "train.policy_kwargs",
+        )
+    if tc.normalize:
+        raise ConfigError(
+            "VecNormalize is stable-baselines3's; the rllib backend trains on the raw "
+            "observations and rewards: set it false",
+            "train.normalize",
+        )
     return check_options(tc.rllib)
 
 
