@@ -17,17 +17,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-# This folder is sys.path[0] when the script runs, and bench/bottleneck.py would shadow the
-# optional `bottleneck` package pandas (imported by Ray Tune) looks for.
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).parent.resolve()]
-
-from flowrun.config.loader import load_config  # noqa: E402
-from flowrun.config.model import ExperimentConfig  # noqa: E402
+from flowrun.config.loader import load_config
+from flowrun.config.model import ExperimentConfig
 
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "rllib_ring.yaml"
 MINIBATCH, EPOCHS, LR, GAMMA = 600, 10, 5e-4, 0.999

@@ -1,6 +1,6 @@
 """The bottleneck's capacity drop: outflow against inflow, all human drivers.
 
-Run: ``.venv/bin/python bench/bottleneck.py`` (a few minutes; ``--help`` for the grid).
+Run: ``.venv/bin/python bench/capacity_drop.py`` (a few minutes; ``--help`` for the grid).
 Each inflow runs ``configs/bottleneck.yaml`` (Flow's bottleneck, scaling 1, SUMO's drivers
 with Flow's lane-change mode ``sumo_default``) with ``--seeds`` seeds for ``--seconds``
 simulated seconds, and measures the outflow (cars leaving the end of edge ``5``) over the
