@@ -30,6 +30,7 @@ from flowrun.cli.commands_run import (
     overrides_with_seed,
 )
 from flowrun.cli.common import guarded
+from flowrun.errors import FlowrunError
 
 if TYPE_CHECKING:
     from flowrun.experiment.metrics import RunMetrics
@@ -201,6 +202,12 @@ def _evaluate_and_show(
             result = evaluate(run_dir, episodes, deterministic, overrides, config, model,
                               progress, out)
         except KeyboardInterrupt:
+            console.print("[yellow]interrupted[/]: evaluation logs finished")
+            raise typer.Exit(code=stop.exit_code) from None
+        except FlowrunError:
+            if not stop():
+                raise
+            # the signal also stopped a child process (netconvert): still an interruption
             console.print("[yellow]interrupted[/]: evaluation logs finished")
             raise typer.Exit(code=stop.exit_code) from None
     console.print(compare_table(f"{run_dir.name}: {result.model.name}, {episodes} episode(s)",

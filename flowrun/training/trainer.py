@@ -183,16 +183,19 @@ def train(
         status, exit_code = "interrupted", exit_code_of(err)
         _save_interrupted(model, run_dir, tc)
         raise
-    except (EOFError, BrokenPipeError, ConnectionResetError) as err:
-        if not stop():
-            error = f"an environment process stopped unexpectedly ({err!r})"
-            raise TrainingError(error) from err
-        status = "interrupted"  # the signal that stopped us also reached the env processes
-        exit_code = _stop_code(stop)
-        _save_interrupted(model, run_dir, tc)
     except Exception as err:
-        error = f"{type(err).__name__}: {err}"
-        raise
+        if not stop():
+            pipe = isinstance(err, EOFError | BrokenPipeError | ConnectionResetError)
+            error = (f"an environment process stopped unexpectedly ({err!r})" if pipe
+                     else f"{type(err).__name__}: {err}")
+            if pipe:
+                raise TrainingError(error) from err
+            raise
+        # Asked to stop, and the signal also reached a child (an env process, netconvert
+        # building the evaluation's ring): that is how the stop looks, not a failure.
+        log.info("stopping: %r", err)
+        status, exit_code = "interrupted", _stop_code(stop)
+        _save_interrupted(model, run_dir, tc)
     finally:
         done = int(model.num_timesteps) if model is not None else done
         closing = time.perf_counter()
