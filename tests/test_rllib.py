@@ -252,3 +252,39 @@ def test_missing_extra_names_the_install_command(monkeypatch: pytest.MonkeyPatch
     with pytest.raises(TrainingError) as err:
         require_ray()
     assert INSTALL_HINT in str(err.value)
+
+
+def test_flowrun_train_and_eval_commands_run_the_rllib_backend(
+    local_ray: None, tmp_path: Path
+) -> None:
+    from typer.testing import CliRunner
+
+    from flowrun.cli.main import app
+
+    runner = CliRunner()
+    sets = [arg for o in GRID for arg in ("--set", o)]
+    trained = runner.invoke(
+        app, ["train", str(CONFIGS / "multiagent_grid.yaml"), *sets, "--out", str(tmp_path)]
+    )
+    assert trained.exit_code == 0, trained.output
+    run_dir = next(tmp_path.glob("*/*"))
+    assert is_rllib_run(run_dir)
+    assert json.loads((run_dir / "status.json").read_text())["status"] == "complete"
+    evaluated = runner.invoke(
+        app, ["eval", str(run_dir), "--set", "env.horizon=20", "--out", str(tmp_path / "ev")]
+    )
+    assert evaluated.exit_code == 0, evaluated.output
+    assert "final_checkpoint, 1 episode(s)" in evaluated.output
+    assert list((tmp_path / "ev").glob("*/policy_0.mcap"))
+
+
+def test_ray_address_with_the_sb3_backend_is_one_clear_error(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from flowrun.cli.main import app
+
+    args = ["train", str(CONFIGS / "ring_wave.yaml"), "--ray-address", "127.0.0.1:1"]
+    result = CliRunner().invoke(app, [*args, "--out", str(tmp_path)])
+    assert result.exit_code == 1
+    assert "--ray-address is for train.backend: rllib" in result.output
+    assert not list(tmp_path.iterdir())

@@ -79,8 +79,16 @@ def train(
         Path | None,
         typer.Option("--resume", help="Continue this run folder from its last checkpoint."),
     ] = None,
+    ray_address: Annotated[
+        str | None,
+        typer.Option(
+            "--ray-address",
+            help="Ray cluster for train.backend: rllib [default: $RAY_ADDRESS, else a local Ray].",
+        ),
+    ] = None,
 ) -> None:
-    """Train the config's policy (train: section) with stable-baselines3, then evaluate it.
+    """Train the config's policy (train: section) with stable-baselines3 (or RLlib with
+    train.backend: rllib), then evaluate it.
 
     CONFIG is a YAML file or a Flow config module (a .py file defining flow_params; without
     a train: section it trains PPO with flowrun's defaults). With --resume, the run folder's
@@ -94,7 +102,6 @@ def train(
     from flowrun.training.trainer import resume_config
     from flowrun.training.trainer import train as run_training
 
-    require("stable_baselines3")
     overrides = overrides_with_seed(set_, seed)
     if seed is not None:
         overrides.append(f"train.seed={seed}")
@@ -109,6 +116,18 @@ def train(
                 "a Flow config has no train: section: training PPO with flowrun's defaults "
                 "(change them with --set train.total_timesteps=... etc.)"
             )
+    rllib = cfg.train is not None and cfg.train.backend == "rllib"
+    if rllib:
+        from flowrun.training.rllib import require_ray, train_rllib
+
+        require_ray()
+    else:
+        require("stable_baselines3")
+        if ray_address is not None:
+            raise FlowrunError(
+                "--ray-address is for train.backend: rllib; this config trains with "
+                "stable-baselines3 (set train.backend: rllib, or drop --ray-address)"
+            )
     columns = (TextColumn("training"), BarColumn(), MofNCompleteColumn(),
                TextColumn("mean reward {task.fields[reward]}"), TimeElapsedColumn(),
                TimeRemainingColumn())
@@ -120,8 +139,12 @@ def train(
             bar.update(task, completed=done, total=total, reward=shown)
 
         try:
-            result = run_training(cfg, out=out, resume_dir=resume, progress=progress,
-                                  argv=sys.argv, should_stop=stop)
+            if rllib:
+                result = train_rllib(cfg, out=out, resume_dir=resume, progress=progress,
+                                     argv=sys.argv, should_stop=stop, ray_address=ray_address)
+            else:
+                result = run_training(cfg, out=out, resume_dir=resume, progress=progress,
+                                      argv=sys.argv, should_stop=stop)
         except KeyboardInterrupt:
             console.print("[yellow]interrupted[/]: checkpoint saved; continue with --resume")
             raise typer.Exit(code=stop.exit_code) from None
@@ -151,7 +174,12 @@ def eval_(
         typer.Option("--config", help="YAML whose sections override the run's config."),
     ] = None,
     model: Annotated[
-        str, typer.Option("--model", help="best (falls back to final) or final.")
+        str,
+        typer.Option(
+            "--model",
+            help="best (falls back to final), final, or (RLlib) a checkpoint folder such as "
+            "checkpoints/iter_000004.",
+        ),
     ] = "best",
     seed: SeedOpt = None,
     out: EvalOutOpt = None,
@@ -163,8 +191,10 @@ def eval_(
     --out DIR, DIR/<timestamp>-<seed>/. Ctrl-C or SIGTERM finishes the logs and exits 130 / 143.
     """
     from flowrun.training.deps import require
+    from flowrun.training.rllib import is_rllib_run
 
-    require("stable_baselines3")
+    if not is_rllib_run(run_dir):
+        require("stable_baselines3")
     _evaluate_and_show(run_dir, episodes, deterministic, overrides_with_seed(set_, seed),
                        config, model, out)
 
@@ -179,7 +209,10 @@ def _evaluate_and_show(
     out: Path | None,
 ) -> None:
     from flowrun.training.evaluate import eval_config, evaluate
+    from flowrun.training.rllib import evaluate_rllib, is_rllib_run
     from flowrun.training.runstate import run_state
+
+    evaluate_run = evaluate_rllib if is_rllib_run(run_dir) else evaluate
 
     horizon = eval_config(run_dir, overrides, config).env.horizon
     state = run_state(run_dir)
@@ -199,8 +232,8 @@ def _evaluate_and_show(
             stop.check()
 
         try:
-            result = evaluate(run_dir, episodes, deterministic, overrides, config, model,
-                              progress, out)
+            result = evaluate_run(run_dir, episodes, deterministic, overrides, config, model,
+                                  progress, out)
         except KeyboardInterrupt:
             console.print("[yellow]interrupted[/]: evaluation logs finished")
             raise typer.Exit(code=stop.exit_code) from None
