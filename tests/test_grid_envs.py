@@ -263,3 +263,23 @@ def test_full_env_puts_cars_that_reach_an_exit_back_at_their_entry_as_flow() -> 
         assert sorted(vk.get_ids()) == sorted(f"human_{i}" for i in range(16))
     finally:
         env.close()
+
+
+def test_po_env_marks_its_observed_cars_and_rewards_read_every_speed() -> None:
+    from flowrun.core import rewards
+
+    env = make_env(load_config(CONFIGS / "grid0.yaml", ["env.horizon=60"]))
+    try:
+        env.reset(seed=0)
+        for _ in range(40):
+            env.step(np.zeros(9, np.float32))
+        vk = env.k.vehicle
+        observed = [v for v in env.observed_ids if v in vk.table]  # type: ignore[attr-defined]
+        assert observed and set(observed) <= set(vk.get_observed_ids())
+        speeds = np.array(vk.get_speed(vk.get_ids()))
+        assert rewards.penalize_standstill(env) == -np.count_nonzero(speeds == 0)
+        v_top = max(env.k.network.speed_limit(e) for e in env.k.network.get_edge_list())
+        delay = env.sim_step * np.sum((v_top - speeds) / v_top) / len(speeds)
+        assert rewards.min_delay_unscaled(env) == pytest.approx(delay, rel=1e-6)
+    finally:
+        env.close()

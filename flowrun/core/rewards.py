@@ -25,6 +25,10 @@ def _speeds(env: Any, veh_ids: Sequence[str]) -> FloatArray:
 
 
 def _all_speeds(env: Any) -> FloatArray:
+    """Every car's speed, m/s, in ``get_ids()`` order (the kernel's array when it has one)."""
+    speed = getattr(env.k.vehicle, "speed", None)
+    if isinstance(speed, np.ndarray):
+        return np.array(speed, dtype=np.float64)  # a copy: callers may not write into it
     return _speeds(env, env.k.vehicle.get_ids())
 
 

@@ -164,10 +164,7 @@ class MergePOEnv(Env):
     def additional_command(self) -> None:
         """Flow's: keep the AV queue current and mark the observed neighbours."""
         self.update_rl_queue()
-        vk = self.k.vehicle
-        for veh_id in self.leader + self.follower:
-            if veh_id in vk.table:
-                vk.set_observed(veh_id)
+        self.k.vehicle.set_observed_many(self.leader + self.follower)
 
     # ------------------------------------------------------------------ Flow's hooks
     def _apply_rl_actions(self, rl_actions: Any) -> None:

@@ -131,10 +131,7 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         """Yellow timers, and Flow's marking of the observed cars (no re-insertion: Flow's
         PO env replaces its parent's command)."""
         self._advance_timers()
-        vk = self.k.vehicle
-        for veh_id in self.observed_ids:
-            if veh_id in vk.table:
-                vk.set_observed(veh_id)
+        self.k.vehicle.set_observed_many(self.observed_ids)
 
 
 class TrafficLightGridBenchmarkEnv(TrafficLightGridPOEnv):

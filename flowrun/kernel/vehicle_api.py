@@ -135,6 +135,11 @@ class FlowVehicleGetters:
         """Mark a vehicle as observed."""
         self._observed.setdefault(veh_id, None)
 
+    def set_observed_many(self, veh_ids: Iterable[str]) -> None:
+        """Mark several vehicles as observed (ids not in the network are skipped)."""
+        table = self.table
+        self._observed.update(dict.fromkeys(v for v in veh_ids if v in table))
+
     def remove_observed(self, veh_id: str) -> None:
         """Unmark a vehicle as observed."""
         self._observed.pop(veh_id, None)
