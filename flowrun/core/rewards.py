@@ -46,8 +46,10 @@ def desired_velocity(env: Any, fail: bool = False, edge_list: Iterable[str] | No
     ``env.env_params.additional_params``.
     """
     vk = env.k.vehicle
-    ids = vk.get_ids() if edge_list is None else vk.get_ids_by_edge(list(edge_list))
-    speeds = _speeds(env, ids)
+    if edge_list is None:
+        speeds = _all_speeds(env)
+    else:
+        speeds = _speeds(env, vk.get_ids_by_edge(list(edge_list)))
     if speeds.size and speeds.min() < -100:
         return 0.0
     target = float(env.env_params.additional_params["target_velocity"])

@@ -63,6 +63,8 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         self.node_mapping: list[tuple[str, list[str]]] = list(mapping)
         self.edge_list = [e.id for e in self.network.spec.edges]
         self._edge_col = {e: i for i, e in enumerate(self.edge_list)}
+        self._col_names: list[str] | None = None  # the lane table _col_by_index was built for
+        self._col_by_index = np.zeros(0, dtype=np.int64)
         self._edge_len = np.array([e.length for e in self.network.spec.edges])
         norm = max(self.num_edges - 1, 1)
         self._edge_num = {e: edge_number(e, self.rows, self.cols) / norm for e in self.edge_list}
@@ -91,7 +93,7 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         speeds = np.asarray(vk.speed, dtype=np.float64)
         pos = np.asarray(vk.lane_pos, dtype=np.float64)
         n = speeds.size
-        col = np.fromiter((self._edge_col.get(e, -1) for e in vk.edges), np.int64, n)
+        col = self._edge_columns(vk, n)
         # the num_observed cars nearest the junction on each observed edge, edge by edge
         slot = self._slot_of_col[col]  # col -1 (internal edge) maps to the last entry: -1
         rows = np.flatnonzero(slot >= 0)
@@ -117,6 +119,17 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         obs = np.concatenate([obs_speed, obs_dist, obs_edge, density, velocity,
                               self.timers.features()])  # fmt: skip
         return np.clip(obs, 0.0, OBS_HIGH).astype(np.float32)
+
+    def _edge_columns(self, vk: Any, n: int) -> np.ndarray:
+        """Each car's observed-edge column (-1: not an observed edge), by edge index."""
+        index = vk.edge_index
+        if index is None:
+            return np.fromiter((self._edge_col.get(e, -1) for e in vk.edges), np.int64, n)
+        names = vk.edge_names
+        if self._col_names is not names:  # a new lane table (a new episode)
+            self._col_names = names
+            self._col_by_index = np.array([self._edge_col.get(e, -1) for e in names], np.int64)
+        return self._col_by_index[index]
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """``-delay - 0.2 * standing cars`` (``-delay`` when evaluating)."""

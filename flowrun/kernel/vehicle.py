@@ -238,6 +238,20 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             self.tailway = self.follower_headway
 
     @property
+    def edge_index(self) -> np.ndarray | None:
+        """Every car's edge as an index into :attr:`edge_names` (``None`` on the ring's
+        fast path, which has no lane table)."""
+        if self._lanes is None:
+            return None
+        return self._lanes.edge_index[self._lane_key]
+
+    @property
+    def edge_names(self) -> list[str]:
+        """The network's edge ids, junction-internal ones included, as :attr:`edge_index`
+        counts them (empty on the ring's fast path)."""
+        return [] if self._lanes is None else self._lanes.edge_names
+
+    @property
     def multi_lane(self) -> bool:
         """Whether any edge of the network has more than one lane."""
         return self._multi_lane
@@ -351,7 +365,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
     @property
     def lane_pos(self) -> np.ndarray:
         """Position of every vehicle on its lane, m."""
-        self._derive_edges()
+        if self.ring_path:  # derived from the ring position with the edges
+            self._derive_edges()
         return self._lane_pos
 
     @property
