@@ -177,24 +177,51 @@ def evaluate(
         raise TrainingError(f"cannot load {path}: {err}") from None
     stats = BEST_VECNORMALIZE if path.name == BEST_MODEL else VECNORMALIZE
     normalize = _load_normalize(run_dir / stats) if tc.normalize else None
-    seed = int(cfg.sim.seed or 0)
-    out_dir = _eval_dir(run_dir / "eval" if out is None else out, seed)
-    (out_dir / "config.yaml").write_text(dump_config(cfg))
-    head = {"seed": seed, "deterministic": deterministic, "model": str(path),
-            "run": str(run_dir), "run_status": status}
-    write_json(out_dir / "metrics.json", {"status": "running", **head})
-    mark_running(out_dir)
-    logs: list[Path] = []
 
     def act(obs: Any) -> Any:
         x = normalize.normalize_obs(obs) if normalize is not None else obs
         action, _ = policy.predict(x, deterministic=deterministic)
         return action
 
+    head = {"deterministic": deterministic}
+    return run_evaluation(cfg, run_dir, path, status, head, act, episodes, progress, out)
+
+
+def run_evaluation(
+    cfg: ExperimentConfig,
+    run_dir: Path,
+    model: Path,
+    run_status: str,
+    head: dict[str, Any],
+    act: Callable[[Any], Any],
+    episodes: int,
+    progress: EvalProgress | None,
+    out: Path | None,
+    wrap: Callable[[Any], Any] | None = None,
+) -> EvalResult:
+    """The evaluation folder of any backend: the policy's and the all-human rollouts of
+    ``episodes`` episodes each (episode ``i`` seeded ``sim.seed + i``), their MCAP logs,
+    ``metrics.json`` (``head`` plus seed, run, model and ``run_status``; ``running`` ->
+    ``complete`` / ``interrupted``) and ``status.json``.
+
+    Args:
+        model: the model (file or checkpoint) rolled out.
+        run_status: the training run's state (:func:`flowrun.training.runstate.run_state`).
+        act: the policy, ``obs -> action``.
+        wrap: applied to each env before it is stepped (e.g. a multi-agent env's joint view).
+    """
+    seed = int(cfg.sim.seed or 0)
+    out_dir = _eval_dir(run_dir / "eval" if out is None else out, seed)
+    (out_dir / "config.yaml").write_text(dump_config(cfg))
+    head = {"seed": seed, "run": str(run_dir), "model": str(model), "run_status": run_status,
+            **head}  # fmt: skip
+    write_json(out_dir / "metrics.json", {"status": "running", **head})
+    mark_running(out_dir)
+    logs: list[Path] = []
     try:
-        rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
+        rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress, wrap)
         human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs,
-                         progress)
+                         progress, wrap)  # fmt: skip
     except KeyboardInterrupt as err:
         write_json(out_dir / "metrics.json",
                    {"status": "interrupted", **head, "logs": [p.name for p in logs]})
@@ -203,7 +230,7 @@ def evaluate(
     except Exception as err:
         mark_done(out_dir, "failed", error=f"{type(err).__name__}: {err}", exit_code=1)
         raise
-    result = EvalResult(out_dir, path, rl, human, logs, status)
+    result = EvalResult(out_dir, model, rl, human, logs, run_status)
     write_json(out_dir / "metrics.json", {"status": "complete", **head, **result.to_dict()})
     mark_done(out_dir, "complete", exit_code=0)
     return result
@@ -232,13 +259,15 @@ def _rollout(
     out_dir: Path,
     logs: list[Path],
     progress: EvalProgress | None,
+    wrap: Callable[[Any], Any] | None = None,
 ) -> list[RunMetrics]:
-    env = make_env(cfg)
+    raw = make_env(cfg)
+    env = raw if wrap is None else wrap(raw)
 
     def sink(run: int) -> FrameSink:
         path = out_dir / f"{label}_{run}.mcap"
         logs.append(path)
-        return open_run_log(path, env, cfg, seed + run, run, extra={"evaluation": label})
+        return open_run_log(path, raw, cfg, seed + run, run, extra={"evaluation": label})
 
     def on_step(run: int, step: int) -> None:
         if progress is not None:
@@ -248,5 +277,5 @@ def _rollout(
         experiment = Experiment(env, sink_factory=sink, progress=on_step)
         experiment.run(episodes, int(cfg.env.horizon), rl_actions=act, seed=seed)
     finally:
-        env.close()
+        raw.close()
     return list(experiment.metrics)

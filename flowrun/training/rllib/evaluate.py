@@ -13,28 +13,14 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Sequence
-from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 
-from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
-from flowrun.envs.base import Env
-from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError, TrainingError
-from flowrun.experiment.baseline import open_run_log
-from flowrun.experiment.metrics import RunMetrics
-from flowrun.experiment.rundir import (
-    exit_code_of,
-    mark_done,
-    mark_running,
-    unique_dir,
-    write_json,
-)
-from flowrun.experiment.runner import Experiment, FrameSink
-from flowrun.training.evaluate import EvalProgress, EvalResult, all_human, eval_config
+from flowrun.training.evaluate import EvalProgress, EvalResult, eval_config, run_evaluation
 from flowrun.training.rllib.deps import require_ray
 from flowrun.training.rllib.train import BEST_CHECKPOINT, FINAL_CHECKPOINT
 from flowrun.training.runstate import run_state
@@ -176,33 +162,14 @@ def evaluate_rllib(
     tc = train_section(cfg)
     path = checkpoint_path(run_dir, model)
     policies = load_policies(path, deterministic)
-    status = run_state(run_dir)
-    seed = int(cfg.sim.seed or 0)
-    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
-    out_dir = unique_dir((run_dir / "eval" if out is None else out) / f"{stamp}-{seed}")
-    (out_dir / "config.yaml").write_text(dump_config(cfg))
-    head = {"seed": seed, "deterministic": deterministic, "backend": "rllib",
-            "model": str(path), "run": str(run_dir), "run_status": status}  # fmt: skip
-    write_json(out_dir / "metrics.json", {"status": "running", **head})
-    mark_running(out_dir)
-    logs: list[Path] = []
     act = _actor(cfg, run_dir, tc.policies, policies)
-    try:
-        rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
-        human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs,
-                         progress)  # fmt: skip
-    except KeyboardInterrupt as err:
-        write_json(out_dir / "metrics.json",
-                   {"status": "interrupted", **head, "logs": [p.name for p in logs]})  # fmt: skip
-        mark_done(out_dir, "interrupted", exit_code=exit_code_of(err))
-        raise
-    except Exception as err:
-        mark_done(out_dir, "failed", error=f"{type(err).__name__}: {err}", exit_code=1)
-        raise
-    result = EvalResult(out_dir, path, rl, human, logs, status)
-    write_json(out_dir / "metrics.json", {"status": "complete", **head, **result.to_dict()})
-    mark_done(out_dir, "complete", exit_code=0)
-    return result
+
+    def joint(env: Any) -> Any:
+        return JointView(env) if getattr(env, "episode_over", None) is not None else env
+
+    head = {"deterministic": deterministic, "backend": "rllib"}
+    return run_evaluation(cfg, run_dir, path, run_state(run_dir), head, act, episodes,
+                          progress, out, wrap=joint)  # fmt: skip
 
 
 def _actor(
@@ -229,33 +196,3 @@ def _actor(
         return actions
 
     return act
-
-
-def _rollout(
-    cfg: ExperimentConfig,
-    label: str,
-    episodes: int,
-    seed: int,
-    act: Callable[[Any], Any] | None,
-    out_dir: Path,
-    logs: list[Path],
-    progress: EvalProgress | None,
-) -> list[RunMetrics]:
-    raw = make_env(cfg)
-    env = JointView(raw) if getattr(raw, "episode_over", None) is not None else raw
-
-    def sink(run: int) -> FrameSink:
-        path = out_dir / f"{label}_{run}.mcap"
-        logs.append(path)
-        return open_run_log(path, raw, cfg, seed + run, run, extra={"evaluation": label})
-
-    def on_step(run: int, step: int) -> None:
-        if progress is not None:
-            progress(label, run, step)
-
-    try:
-        experiment = Experiment(cast(Env, env), sink_factory=sink, progress=on_step)
-        experiment.run(episodes, int(cfg.env.horizon), rl_actions=act, seed=seed)
-    finally:
-        raw.close()
-    return list(experiment.metrics)
