@@ -33,6 +33,7 @@ from flowrun.cli.common import (
     SetOpt,
     guarded,
     interrupted_exit,
+    on_stop_signals,
     overrides_with_seed,
 )
 from flowrun.errors import ConfigError, FlowrunError
@@ -53,12 +54,8 @@ def _stop_requests() -> Iterator[list[int]]:
     def handler(signum: int, frame: Any) -> None:
         received.append(signum)
 
-    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
+    with on_stop_signals(handler):
         yield received
-    finally:
-        for s, h in previous.items():
-            signal.signal(s, h)
 
 
 def _term_with_parent() -> None:

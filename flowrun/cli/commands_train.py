@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import signal
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -29,7 +28,7 @@ from flowrun.cli.commands_run import (
     console,
     overrides_with_seed,
 )
-from flowrun.cli.common import guarded
+from flowrun.cli.common import guarded, on_stop_signals
 from flowrun.errors import FlowrunError
 
 if TYPE_CHECKING:
@@ -57,12 +56,8 @@ def stop_on_signals() -> Iterator[StopRequest]:
     def handler(signum: int, frame: Any) -> None:
         request.signal(signum)
 
-    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
+    with on_stop_signals(handler):
         yield request
-    finally:
-        for s, h in previous.items():
-            signal.signal(s, h)
 
 
 def _progress_bar(*columns: Any) -> Progress:

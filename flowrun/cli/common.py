@@ -87,6 +87,18 @@ def overrides_with_seed(sets: list[str] | None, seed: int | None) -> list[str]:
 
 
 @contextmanager
+def on_stop_signals(handler: Callable[[int, Any], None]) -> Iterator[None]:
+    """Ctrl-C (SIGINT) and SIGTERM call ``handler`` while inside; the previous handlers are
+    restored on the way out."""
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+@contextmanager
 def sigterm_as_interrupt() -> Iterator[None]:
     """Raise SIGTERM as :class:`Interrupted` (like Ctrl-C) so ``finally`` blocks run.
 
@@ -96,12 +108,8 @@ def sigterm_as_interrupt() -> Iterator[None]:
     def handler(signum: int, frame: Any) -> None:
         raise Interrupted(signum)
 
-    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
+    with on_stop_signals(handler):
         yield
-    finally:
-        for s, h in previous.items():
-            signal.signal(s, h)
 
 
 @contextmanager
@@ -123,12 +131,8 @@ def interrupt_between_steps() -> Iterator[Callable[[], None]]:
         if received:
             raise Interrupted(received[0])
 
-    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
+    with on_stop_signals(handler):
         yield check
-    finally:
-        for s, h in previous.items():
-            signal.signal(s, h)
 
 
 def interrupted_exit(err: KeyboardInterrupt, message: str) -> typer.Exit:
