@@ -15,16 +15,13 @@ import json
 import logging
 import math
 import re
-import shlex
 import shutil
-import sys
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig, TrainConfig
 from flowrun.errors import TrainingError
 from flowrun.experiment.rundir import (
@@ -35,6 +32,7 @@ from flowrun.experiment.rundir import (
     write_json,
 )
 from flowrun.training.callbacks import TrainProgress
+from flowrun.training.resume import note_resume
 from flowrun.training.rllib.cluster import RaySession, ray_session
 from flowrun.training.rllib.deps import require_ray
 from flowrun.training.rllib.options import (
@@ -111,7 +109,7 @@ def train_rllib(
             run_dir = resume_dir
             lock = RunLock(run_dir).acquire()
             mark_running(run_dir)
-            _note_resume(run_dir, cfg, state, argv)
+            note_resume(run_dir, cfg, state, argv)
         else:
             run_dir = start_run(out, cfg, seed, argv)
             lock = RunLock(run_dir).acquire()
@@ -317,20 +315,6 @@ def read_state(run_dir: Path) -> dict[str, Any]:
     if not (run_dir / "checkpoints" / str(state.get("checkpoint"))).is_dir():
         raise TrainingError(f"{path} names a checkpoint that is missing: {state.get('checkpoint')}")
     return dict(state)
-
-
-def _note_resume(
-    run_dir: Path, cfg: ExperimentConfig, state: dict[str, Any], argv: list[str] | None
-) -> None:
-    """Append the command line; keep the earlier config if the resumed one differs."""
-    command = argv if argv is not None else sys.argv
-    with (run_dir / "command.txt").open("a") as f:
-        f.write(shlex.join(command) + "\n")
-    text = dump_config(cfg)
-    current = run_dir / "config.yaml"
-    if current.read_text() != text:
-        current.rename(run_dir / f"config.before_{state['timesteps']}.yaml")
-        current.write_text(text)
 
 
 def _add_version(run_dir: Path, name: str, value: str) -> None:
