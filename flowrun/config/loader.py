@@ -14,19 +14,18 @@ environment is made (config sits below ``flowrun.envs`` and does not import it);
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import logging
 import os
 import re
 import stat
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from flowrun.config.convert import Converter
-from flowrun.config.experiment_checks import check_experiment, ignored_settings
+from flowrun.config.experiment_checks import check_experiment, ignored_settings, optional, sub_path
 from flowrun.config.model import ExperimentConfig
-from flowrun.config.overrides import apply_overrides, parse_key
+from flowrun.config.overrides import apply_overrides
 from flowrun.config.params import VehicleType
 from flowrun.config.yamlio import KeyPath, Locations, format_path, parse_yaml
 from flowrun.errors import ConfigError, FlowrunError
@@ -190,31 +189,9 @@ def _check_group_ids(cfg: ExperimentConfig, data: Mapping[str, Any], loc: Locati
         first[group.veh_id] = i
 
 
-def _optional(module: str, attr: str) -> Callable[..., Any] | None:
-    """``module.attr``, or ``None`` while that module is not written yet."""
-    try:
-        mod = importlib.import_module(module)
-    except ModuleNotFoundError as err:
-        if err.name and module.startswith(err.name):
-            return None
-        raise
-    found = getattr(mod, attr, None)
-    return found if callable(found) else None
-
-
-def _sub_path(path: str) -> KeyPath:
-    """A path reported by another module's ConfigError, as key-path parts."""
-    if not path:
-        return ()
-    try:
-        return parse_key(path)
-    except ConfigError:
-        return (path,)
-
-
 def _check_controllers(cfg: ExperimentConfig, data: Mapping[str, Any], loc: Locations) -> None:
-    resolve = _optional("flowrun.controllers.registry", "resolve_controller")
-    build = _optional("flowrun.controllers.registry", "build_controller")
+    resolve = optional("flowrun.controllers.registry", "resolve_controller")
+    build = optional("flowrun.controllers.registry", "build_controller")
     for i, group in enumerate(cfg.vehicles.groups):
         raw = _raw_group(data, i)
         for name, kind in _CONTROLLER_FIELDS.items():
@@ -239,7 +216,7 @@ def _check_controllers(cfg: ExperimentConfig, data: Mapping[str, Any], loc: Loca
 def _param_path(err: ConfigError, params: Mapping[str, Any]) -> KeyPath:
     """The parameter a controller's error is about: its ``path``, else the first one it names."""
     if err.path:
-        return _sub_path(err.path)
+        return sub_path(err.path)
     for pattern in ("'{}'", r"\b{}\b"):
         found = [
             (m.start(), key)
@@ -278,7 +255,7 @@ def _build_network(cfg: ExperimentConfig, loc: Locations) -> Any:
     ``None`` while ``flowrun.networks`` is not importable. A network that cannot be built (a
     missing template file, a route over unconnected edges, ...) is reported at its key.
     """
-    find = _optional("flowrun.networks.registry", "network_class")
+    find = optional("flowrun.networks.registry", "network_class")
     if find is None:
         return None
     try:
@@ -287,7 +264,7 @@ def _build_network(cfg: ExperimentConfig, loc: Locations) -> Any:
         network = cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial, tls)
     except ConfigError as err:
         message = f"{err.location}: {err.message}" if err.location else err.message
-        raise loc.error(message, ("network", *_sub_path(err.path))) from None
+        raise loc.error(message, ("network", *sub_path(err.path))) from None
     except FlowrunError as err:  # e.g. netconvert refusing an OpenStreetMap file
         raise loc.error(str(err), ("network",)) from None
     return network
@@ -306,7 +283,7 @@ def _check_traffic_lights(cfg: ExperimentConfig, network: Any, loc: Locations) -
             (*at, "controller"),
         )
     params = tls.programs
-    check = _optional("flowrun.networks.tls", "check_programs")
+    check = optional("flowrun.networks.tls", "check_programs")
     if check is None or not (params.get_properties() or params.baseline):
         return
     try:
@@ -325,14 +302,14 @@ def _check_traffic_lights(cfg: ExperimentConfig, network: Any, loc: Locations) -
 
 
 def _check_network(cfg: ExperimentConfig, loc: Locations) -> None:
-    validate = _optional("flowrun.networks.registry", "validate_network")
+    validate = optional("flowrun.networks.registry", "validate_network")
     if validate is None:
         return
     params = dict(cfg.network.net_params.additional_params)
     try:
         validate(cfg.network.type, params, cfg.vehicles, cfg.initial)
     except ConfigError as err:
-        raise loc.error(err.message, ("network", *_sub_path(err.path))) from None
+        raise loc.error(err.message, ("network", *sub_path(err.path))) from None
 
 
 def override_config(cfg: ExperimentConfig, overrides: Sequence[str]) -> ExperimentConfig:
