@@ -1,0 +1,57 @@
+"""A fingerprint of an environment's behaviour: sha256 of its observations and rewards under
+seeded random actions. Equal fingerprints at two commits mean the env (and the simulation
+under it) did not change for that config.
+
+Run: ``.venv/bin/python bench/env_fingerprint.py [CONFIG] [--seeds 0 1] [--steps 2300]``.
+Another commit's code with this script:
+``git worktree add /tmp/old REV && PYTHONPATH=/tmp/old .venv/bin/python bench/env_fingerprint.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+from pathlib import Path
+
+import numpy as np
+
+from flowrun.config.loader import load_config
+from flowrun.envs.factory import make_env
+
+CONFIG = Path(__file__).resolve().parent.parent / "configs" / "ring_wave.yaml"
+
+
+def fingerprint(config: Path, seeds: list[int], steps: int) -> tuple[str, int]:
+    """The sha256 (hex) of every observation and reward, and the steps taken in all."""
+    env = make_env(load_config(config))
+    digest, taken = hashlib.sha256(), 0
+    try:
+        for seed in seeds:
+            obs, _ = env.reset(seed=seed)
+            digest.update(np.asarray(obs, np.float64).tobytes())
+            rng = np.random.default_rng(seed)
+            for _ in range(steps):
+                action = rng.uniform(-1, 1, env.action_space.shape).astype(np.float32)
+                obs, reward, terminated, truncated, _ = env.step(action)
+                digest.update(np.asarray(obs, np.float64).tobytes())
+                digest.update(np.float64(reward).tobytes())
+                taken += 1
+                if terminated or truncated:
+                    break
+    finally:
+        env.close()
+    return digest.hexdigest(), taken
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("config", nargs="?", type=Path, default=CONFIG)
+    p.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+    p.add_argument("--steps", type=int, default=2300, help="env steps per seed at most")
+    args = p.parse_args()
+    digest, taken = fingerprint(args.config, args.seeds, args.steps)
+    print(f"{args.config.name}: seeds {args.seeds}, {taken} env steps: sha256 {digest[:16]}")
+
+
+if __name__ == "__main__":
+    main()
