@@ -14,11 +14,9 @@ the tables and the plot.
 
 from __future__ import annotations
 
-import fcntl
 import hashlib
 import itertools
 import json
-import os
 import re
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -31,6 +29,7 @@ import numpy as np
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, FlowrunError
+from flowrun.experiment.folder_lock import FolderLock
 from flowrun.experiment.metrics import RunMetrics
 from flowrun.experiment.rundir import is_complete, read_status, write_json
 from flowrun.suggest import unknown_name
@@ -226,19 +225,14 @@ def locked(plan: SweepPlan) -> Iterator[None]:
         FlowrunError: another process is running the same sweep.
     """
     plan.folder.mkdir(parents=True, exist_ok=True)
-    with (plan.folder / ".lock").open("a+") as f:
-        try:
-            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            f.seek(0)
-            raise FlowrunError(
-                f"this sweep is already running (pid {f.read().strip() or '?'}) in "
-                f"{plan.folder}; wait for it, or stop it and run the command again"
-            ) from None
-        f.seek(0)
-        f.truncate()
-        f.write(f"{os.getpid()}\n")
-        f.flush()
+
+    def busy(holder: str) -> FlowrunError:
+        return FlowrunError(
+            f"this sweep is already running (pid {holder}) in {plan.folder}; wait for it, "
+            "or stop it and run the command again"
+        )
+
+    with FolderLock(plan.folder / ".lock", busy):
         yield
 
 

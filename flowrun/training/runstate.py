@@ -9,15 +9,15 @@ lock: :func:`run_state` reports it as ``cut``, so nothing mistakes it for a fini
 
 from __future__ import annotations
 
-import fcntl
 import json
-import os
 import signal
+from collections.abc import Callable
 from pathlib import Path
-from types import TracebackType
 from typing import Any
 
 from flowrun.errors import TrainingError
+from flowrun.experiment.folder_lock import FolderLock
+from flowrun.experiment.folder_lock import is_locked as lock_held
 from flowrun.experiment.rundir import Interrupted, read_status, write_json
 
 LOCK_FILE = ".train.lock"
@@ -25,8 +25,8 @@ METRICS = "metrics.json"
 STATUSES = ("running", "complete", "interrupted", "failed")
 
 
-class RunLock:
-    """An exclusive lock on a run folder while a process trains into it (``flock``).
+class RunLock(FolderLock):
+    """An exclusive lock on a run folder while a process trains into it (``.train.lock``).
 
     The operating system releases it when the process ends, however it ends, so a killed run
     never leaves a stale lock.
@@ -34,64 +34,22 @@ class RunLock:
 
     def __init__(self, run_dir: Path) -> None:
         """Prepare the lock of ``run_dir`` (taken by :meth:`acquire` or ``with``)."""
-        self.path = run_dir / LOCK_FILE
-        self._fd: int | None = None
+        super().__init__(run_dir / LOCK_FILE, _busy_run(run_dir))
 
-    def acquire(self) -> RunLock:
-        """Take the lock, or say who holds it.
 
-        Raises:
-            TrainingError: another process trains into this folder.
-        """
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
-            os.close(fd)
-            raise TrainingError(
-                f"{self.path.parent} is in use by another flowrun train (pid {holder}); "
-                "wait for it to finish or stop it (Ctrl-C) before resuming"
-            ) from None
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
-        self._fd = fd
-        return self
+def _busy_run(run_dir: Path) -> Callable[[str], TrainingError]:
+    def busy(holder: str) -> TrainingError:
+        return TrainingError(
+            f"{run_dir} is in use by another flowrun train (pid {holder}); "
+            "wait for it to finish or stop it (Ctrl-C) before resuming"
+        )
 
-    def release(self) -> None:
-        """Release the lock (idempotent)."""
-        if self._fd is not None:
-            fcntl.flock(self._fd, fcntl.LOCK_UN)
-            os.close(self._fd)
-            self._fd = None
-
-    def __enter__(self) -> RunLock:
-        """Acquire."""
-        return self.acquire()
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        """Release."""
-        self.release()
+    return busy
 
 
 def is_locked(run_dir: Path) -> bool:
     """Whether a live process holds ``run_dir``'s training lock."""
-    path = run_dir / LOCK_FILE
-    if not path.is_file():
-        return False
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
-    except BlockingIOError:
-        return True
-    finally:
-        os.close(fd)
-    return False
+    return lock_held(run_dir / LOCK_FILE)
 
 
 def read_metrics(run_dir: Path) -> dict[str, Any] | None:
