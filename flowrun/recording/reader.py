@@ -143,10 +143,7 @@ class McapLog:
                 chunk = self._chunk(f, ref)
                 if chunk is None:
                     continue
-                for sch in chunk.schemas:
-                    self._schemas.setdefault(sch.id, sch)
-                for ch in chunk.channels:
-                    self._channels.setdefault(ch.id, ch)
+                self._learn(chunk)
                 if self._vehicles_ok():
                     return
         # McapRecorder (library "flowrun") registers vehicles = 1 and stats = 2 first
@@ -192,6 +189,13 @@ class McapLog:
                 f"with schema {sch.name if sch else None!r}; this flowrun reads "
                 f"{schema.ENCODING!r} {schema.VEHICLES_TYPE!r}"
             )
+
+    def _learn(self, chunk: _Chunk) -> None:
+        """Keep the schemas and channels a chunk carries (the summary may have lost them)."""
+        for sch in chunk.schemas:
+            self._schemas.setdefault(sch.id, sch)
+        for ch in chunk.channels:
+            self._channels.setdefault(ch.id, ch)
 
     def _chunk(self, f: IO[bytes], ref: mcap_records.ChunkRef) -> _Chunk | None:
         """A chunk's verified records, or ``None`` (recorded in :attr:`damage`, warned once)."""
@@ -319,10 +323,7 @@ class McapLog:
                 chunk = self._settle(f, ref, loaded)
                 if chunk is None:
                     continue
-                for sch in chunk.schemas:
-                    self._schemas.setdefault(sch.id, sch)
-                for ch in chunk.channels:
-                    self._channels.setdefault(ch.id, ch)
+                self._learn(chunk)
                 keep = self._wanted_channels(wanted)
                 records = chunk.records
                 for opcode, start, end in chunk.spans:
