@@ -46,7 +46,9 @@ def test_a_config_the_backend_cannot_run_is_refused_with_one_config_error(
 
 
 def test_the_sumo_backend_is_not_checked() -> None:
-    check_numpy_backend(load("figure_eight"))  # no error: SUMO runs it
+    assert check_numpy_backend(load("figure_eight")) is None  # SUMO runs it
+    with pytest.raises(ConfigError, match=r"use sim\.backend: sumo"):  # numpy cannot
+        check_numpy_backend(load("figure_eight", "sim.backend=numpy"))
 
 
 def test_same_seed_gives_the_same_episode_and_another_seed_another() -> None:

@@ -30,7 +30,11 @@ def test_each_missing_env_param_is_a_key_error_and_a_config_error(key: str) -> N
 
 def test_all_env_params_given_builds_the_env() -> None:
     env = AccelEnv(EnvParams(additional_params=dict(ADDITIONAL_ENV_PARAMS)), SumoParams(), ring())
-    env.close()
+    try:
+        assert env.env_params.additional_params == ADDITIONAL_ENV_PARAMS
+        assert env.initial_vehicles.num_vehicles == 2
+    finally:
+        env.close()
 
 
 def test_count_mismatch_is_an_assertion_error() -> None:
