@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -22,6 +23,7 @@ from flowrun.cli.common import (
     guarded,
     interrupt_between_steps,
     interrupted_exit,
+    load_located,
     overrides_with_seed,
     sigterm_as_interrupt,
 )
@@ -122,10 +124,11 @@ def baseline(
 
     Ctrl-C or SIGTERM finishes the logs and exits 130 / 143.
     """
-    from flowrun.config.flow_module import load_any_config
+    from flowrun.config.preflight import preflight
     from flowrun.experiment.baseline import resolve_steps, run_baseline
 
-    cfg = load_any_config(config, overrides_with_seed(set_, seed))
+    cfg, where = load_located(config, overrides_with_seed(set_, seed))
+    preflight(replace(cfg, train=None), where)  # env class and its params, at file:line
     total = resolve_steps(cfg, steps)
     columns = (
         TextColumn("run {task.fields[run]}"),

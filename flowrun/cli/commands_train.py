@@ -28,7 +28,7 @@ from flowrun.cli.commands_run import (
     console,
     overrides_with_seed,
 )
-from flowrun.cli.common import guarded, on_stop_signals
+from flowrun.cli.common import DEFAULT_OUT, guarded, load_located, on_stop_signals, out_option
 from flowrun.errors import FlowrunError
 
 if TYPE_CHECKING:
@@ -38,7 +38,7 @@ if TYPE_CHECKING:
 RunDirArg = Annotated[Path, typer.Argument(help="A train run folder.", show_default=False)]
 EvalOutOpt = Annotated[
     Path | None,
-    typer.Option("--out", help="Folder for evaluation folders [default: RUN_DIR/eval]."),
+    out_option("the evaluation folders: OUT/<timestamp>-<seed>/ [default: OUT is RUN_DIR/eval]"),
 ]
 
 
@@ -69,7 +69,7 @@ def train(
     config: AnyConfigArg,
     set_: SetOpt = None,
     seed: SeedOpt = None,
-    out: OutOpt = Path("runs"),
+    out: OutOpt = DEFAULT_OUT,
     resume: Annotated[
         Path | None,
         typer.Option("--resume", help="Continue this run folder from its last checkpoint."),
@@ -91,8 +91,9 @@ def train(
     continues from its last checkpoint, keeping the earlier monitor files, evaluations and
     best model. Ctrl-C or SIGTERM saves a checkpoint and exits with 130 / 143.
     """
-    from flowrun.config.flow_module import is_flow_module, load_any_config
+    from flowrun.config.flow_module import is_flow_module
     from flowrun.config.model import TrainConfig
+    from flowrun.config.preflight import preflight
     from flowrun.training.deps import require
     from flowrun.training.trainer import resume_config
     from flowrun.training.trainer import train as run_training
@@ -104,13 +105,14 @@ def train(
         cfg = resume_config(resume, overrides)
         console.print(f"resuming {resume} with its config.yaml (CONFIG is not re-read)")
     else:
-        cfg = load_any_config(config, overrides)
+        cfg, where = load_located(config, overrides)
         if cfg.train is None and is_flow_module(config):
             cfg = replace(cfg, train=TrainConfig())
             console.print(
                 "a Flow config has no train: section: training PPO with flowrun's defaults "
                 "(change them with --set train.total_timesteps=... etc.)"
             )
+        preflight(cfg, where)  # env class, its params, hyper-parameter names: at file:line
     rllib = cfg.train is not None and cfg.train.backend == "rllib"
     if rllib:
         from flowrun.training.rllib import require_ray, train_rllib
@@ -228,7 +230,7 @@ def _evaluate_and_show(
 
         try:
             result = evaluate_run(run_dir, episodes, deterministic, overrides, config, model,
-                                  progress, out)
+                                  progress, out, should_stop=stop)
         except KeyboardInterrupt:
             console.print("[yellow]interrupted[/]: evaluation logs finished")
             raise typer.Exit(code=stop.exit_code) from None

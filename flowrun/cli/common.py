@@ -9,7 +9,13 @@ everywhere::
 
 - ``--set a.b=value``: override a config value (YAML scalar, never ``eval``); repeatable;
 - ``--seed N``: the experiment's seed (``sim.seed``), applied after every ``--set``;
-- ``--out DIR``: the folder that receives run folders (default ``runs``).
+- ``--out DIR``: always a *folder that receives* what the command makes, each time in a new
+  folder or file of its own (nothing is overwritten): run folders (baseline, train, sweep),
+  evaluation folders (eval), replay folders of plots (replay), the converted YAML (convert).
+  :func:`out_option` words its help the same way on every command.
+
+A command that runs nothing says in its help why it takes no ``--seed``/``--set``
+(:data:`NO_SEED_OR_SET`).
 
 Interruptions: inside :func:`interrupt_between_steps` (or :func:`sigterm_as_interrupt`),
 Ctrl-C and SIGTERM raise :class:`~flowrun.experiment.rundir.Interrupted`, a
@@ -24,12 +30,16 @@ import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any, ParamSpec, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, ParamSpec, TypeVar
 
 import typer
 
 from flowrun.errors import FlowrunError
 from flowrun.experiment.rundir import Interrupted, exit_code_of
+
+if TYPE_CHECKING:
+    from flowrun.config.model import ExperimentConfig
+    from flowrun.config.yamlio import Locations
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -47,9 +57,16 @@ SetOpt = Annotated[
 SeedOpt = Annotated[
     int | None, typer.Option("--seed", help="Seed (overrides sim.seed and any --set of it).")
 ]
-OutOpt = Annotated[
-    Path, typer.Option("--out", help="Folder that receives the run folders.")
-]
+#: How the help of every ``--out`` starts: the option always names a folder.
+OUT_HELP = "Folder that receives"
+
+
+def out_option(receives: str) -> Any:
+    """The ``--out`` option, its help saying what the folder receives (``receives``)."""
+    return typer.Option("--out", help=f"{OUT_HELP} {receives}; nothing in it is overwritten.")
+
+
+OutOpt = Annotated[Path, out_option("the run folders: OUT/<config name>/...")]
 ConfigArg = Annotated[Path, typer.Argument(help="Experiment YAML file.", show_default=False)]
 AnyConfigArg = Annotated[
     Path,
@@ -62,6 +79,8 @@ AnyConfigArg = Annotated[
 #: The long names of the options above: ``--help`` of every command that runs something
 #: lists them (tests/test_runs_options.py checks).
 COMMON_OPTIONS = ("--out", "--seed", "--set")
+#: What the help of a command that runs no simulation says instead of offering them.
+NO_SEED_OR_SET = "runs no simulation, so it takes no --seed or --set"
 
 
 def guarded(fn: Callable[P, R]) -> Callable[P, R]:
@@ -76,6 +95,19 @@ def guarded(fn: Callable[P, R]) -> Callable[P, R]:
             raise typer.Exit(code=1) from None
 
     return wrapper
+
+
+def load_located(config: Path, overrides: list[str]) -> tuple[ExperimentConfig, Locations]:
+    """A YAML config or Flow config module with its ``--set`` overrides, and where its keys
+    stand, so that the checks a run makes before it starts
+    (:func:`flowrun.config.preflight.preflight`) name ``file:line`` as ``validate`` does."""
+    from flowrun.config.flow_module import is_flow_module, load_any_config
+    from flowrun.config.loader import load_config_located
+    from flowrun.config.yamlio import Locations
+
+    if is_flow_module(config):
+        return load_any_config(config, overrides), Locations(str(config))
+    return load_config_located(config, overrides)
 
 
 def overrides_with_seed(sets: list[str] | None, seed: int | None) -> list[str]:
