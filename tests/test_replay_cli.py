@@ -68,8 +68,10 @@ def test_window_vehicles_csv_and_plots(app: typer.Typer, tmp_path: Path) -> None
     )
     assert result.exit_code == 0, result.output
     assert len((tmp_path / "e.csv").read_text().splitlines()) == 1 + 2 * 51
+    (folder,) = (tmp_path / "plots").iterdir()  # a new folder per replay: a-<timestamp>
+    assert folder.name.startswith("a-")
     for name in ("speeds.png", "time_space.png", "vehicle_speeds.png"):
-        assert (tmp_path / "plots" / name).stat().st_size > 0
+        assert (folder / name).stat().st_size > 0
 
 
 def test_compare_two_logs(app: typer.Typer, tmp_path: Path) -> None:
@@ -78,7 +80,8 @@ def test_compare_two_logs(app: typer.Typer, tmp_path: Path) -> None:
     result = run(app, a, b, "--plot", "speed", "--out", tmp_path / "p")
     assert result.exit_code == 0, result.output
     assert "A: a.mcap" in result.stdout and "B: b.mcap" in result.stdout
-    assert (tmp_path / "p" / "speeds.png").exists()
+    (folder,) = (tmp_path / "p").iterdir()
+    assert folder.name.startswith("a-vs-b-") and (folder / "speeds.png").exists()
 
 
 def test_not_mcap_is_one_line_error(app: typer.Typer, tmp_path: Path) -> None:

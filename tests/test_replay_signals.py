@@ -194,10 +194,11 @@ def test_logs_without_the_topic_read_and_replay_as_before(
     assert list(old.signals()) == []
     a, b = summarize(old), summarize(new)
     assert (a.mean_speed, a.logged_steps, a.arrived) == (b.mean_speed, b.logged_steps, b.arrived)
-    result = _cli(old_log, "--plot", "all", "--out", tmp_path)
+    result = _cli(old_log, "--plot", "all", "--out", tmp_path / "replay")
     assert result.exit_code == 0, result.output
     assert "intersections" not in result.output
-    assert (tmp_path / "speeds.png").exists() and not (tmp_path / "signals.png").exists()
+    (plots,) = (tmp_path / "replay").iterdir()  # replay's new folder for these plots
+    assert (plots / "speeds.png").exists() and not (plots / "signals.png").exists()
     result = _cli(old_log, "--plot", "signals", "--out", tmp_path)
     assert result.exit_code == 1
     assert "no /flowrun/traffic_lights topic" in result.output
@@ -207,9 +208,9 @@ def test_logs_without_the_topic_read_and_replay_as_before(
 def test_replay_plots_signals_and_prints_one_row_per_light(
     max_pressure: dict[str, Any], tmp_path: Path
 ) -> None:
-    result = _cli(max_pressure["full"], "--plot", "signals", "--out", tmp_path)
+    result = _cli(max_pressure["full"], "--plot", "signals", "--out", tmp_path / "replay")
     assert result.exit_code == 0, result.output
-    png = tmp_path / "signals.png"
+    (png,) = (tmp_path / "replay").glob("*/signals.png")
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
     for light in range(9):
         assert f"center{light}" in result.output

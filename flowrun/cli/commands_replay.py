@@ -5,7 +5,8 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
+from datetime import UTC, datetime
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, TypeVar
@@ -14,11 +15,20 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from flowrun.cli.common import guarded, interrupted_exit, sigterm_as_interrupt
+from flowrun.cli.common import (
+    NO_SEED_OR_SET,
+    guarded,
+    interrupted_exit,
+    out_option,
+    sigterm_as_interrupt,
+)
 from flowrun.errors import RecordingError
+from flowrun.experiment.rundir import unique_dir
 from flowrun.recording import McapLog, McapRecorder, open_log, repair
 from flowrun.recording.atomic import new_file
 from flowrun.replay import (
+    RouteLayout,
+    SpeedSeries,
     compare,
     layout_for,
     outflow,
@@ -159,10 +169,72 @@ def _intersection_table(log: McapLog, start: float | None, end: float | None) ->
     return table
 
 
+def replay_dir(out: Path | None, logs: list[Path]) -> Path:
+    """A new folder for one replay's plots: ``OUT/<log>-<timestamp>/`` (two logs:
+    ``<a>-vs-<b>-<timestamp>``), OUT defaulting to ``<first log's folder>/replay``; ``-1``,
+    ``-2``, ... when taken, so no earlier plot is ever overwritten.
+
+    Raises:
+        RecordingError: ``out`` is a file.
+        FlowrunError: the folder cannot be created (read-only, disk full).
+    """
+    parent = out if out is not None else logs[0].parent / "replay"
+    if parent.exists() and not parent.is_dir():
+        raise RecordingError(f"--out {parent} is a file; give a folder for the plots")
+    stem = "-vs-".join(p.stem for p in logs)
+    return unique_dir(parent / f"{stem}-{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}")
+
+
+def _plots(
+    plot: PlotKind,
+    opened: list[McapLog],
+    layouts: list[RouteLayout | None],
+    series: list[SpeedSeries],
+    start: float | None,
+    end: float | None,
+    chosen: list[str] | None,
+    folder: Path,
+) -> list[Path]:
+    """Draw what ``--plot`` asks into ``folder``; the PNGs written."""
+    written: list[Path] = []
+    suffixes = [""] if len(opened) == 1 else ["_A", "_B"]
+    if plot in (PlotKind.speed, PlotKind.all):
+        written.append(plot_speeds(opened, folder / "speeds.png", series=series))
+    for lg, layout, suffix in zip(opened, layouts, suffixes, strict=True):
+        if plot in (PlotKind.time_space, PlotKind.all):
+            data = time_space_points(
+                lg, start_s=start, end_s=end, vehicles=chosen, every=plot_stride(lg), route=layout
+            )
+            png = folder / f"time_space{suffix}.png"
+            written.append(plot_time_space(lg, png, data=data, route=layout))
+            if plot is PlotKind.all:
+                png = folder / f"vehicle_speeds{suffix}.png"
+                written.append(plot_vehicle_speeds(lg, png, data=data))
+    for lg, layout, suffix in zip(opened, layouts, suffixes, strict=True):
+        if plot in (PlotKind.traffic, PlotKind.all):
+            traffic = traffic_series(lg, layout, start_s=start, end_s=end)
+            flow = outflow(list(lg.stats(start, end)))
+            written.append(plot_traffic(lg, folder / f"traffic{suffix}.png", traffic, flow))
+    for lg, suffix in zip(opened, suffixes, strict=True):
+        if plot in (PlotKind.signals, PlotKind.all) and lg.has_signals:
+            lights = signal_series(lg, start_s=start, end_s=end)
+            written.append(plot_signals(lg, folder / f"signals{suffix}.png", lights))
+    return written
+
+
+REPLAY_HELP = f"""Summarise a run's MCAP log (or compare two); plot it, export CSV, repair it.
+
+Nothing is overwritten: --plot writes into a new folder each time (see --out), and --csv,
+--foxglove and --repair refuse a file that exists.
+
+replay reads a log and {NO_SEED_OR_SET}: the log holds its seed and config.
+"""
+
+
 def register(app: typer.Typer) -> None:
     """Add the ``replay`` command to ``app``."""
 
-    @app.command("replay")
+    @app.command("replay", help=REPLAY_HELP)
     @guarded
     def replay(
         logs: Annotated[
@@ -197,11 +269,14 @@ def register(app: typer.Typer) -> None:
         ] = None,
         out: Annotated[
             Path | None,
-            typer.Option("--out", help="Folder for plots (default: <log folder>/replay)."),
+            out_option(
+                "a new folder of --plot's PNGs, OUT/<log>-<timestamp>/ [default: OUT is "
+                "<log folder>/replay]"
+            ),
         ] = None,
         csv: Annotated[
             Path | None,
-            typer.Option("--csv", help="Export Flow emission-style CSV to this new file."),
+            typer.Option("--csv", help="Export Flow emission-style CSV to exactly this new file."),
         ] = None,
         repair_: Annotated[
             bool,
@@ -214,11 +289,12 @@ def register(app: typer.Typer) -> None:
         foxglove: Annotated[
             Path | None,
             typer.Option(
-                "--foxglove", help="Write the selected steps/vehicles to a new MCAP file."
+                "--foxglove",
+                help="Write the selected steps/vehicles to exactly this new MCAP file.",
             ),
         ] = None,
     ) -> None:
-        """Summarise a run's MCAP log (or compare two); plot it, export CSV, repair it."""
+        """Summarise, compare, plot, export or repair MCAP logs (help: REPLAY_HELP)."""
         console = Console()
         with _warnings_to_stderr():
             if repair_:
@@ -233,6 +309,11 @@ def register(app: typer.Typer) -> None:
             _check_new(foxglove, "--foxglove")
             if plot is not None and out is not None and out.exists() and not out.is_dir():
                 raise RecordingError(f"--out {out} is a file; give a folder for the plots")
+            if plot is None and out is not None:
+                raise RecordingError(
+                    "--out receives the plots of --plot; add --plot, or drop --out (--csv "
+                    "and --foxglove write exactly the file they name)"
+                )
             chosen = _parse_vehicles(vehicles)
             edges = parse_route(route) if route is not None else None
             opened = [open_log(p) for p in logs]
@@ -306,48 +387,14 @@ def register(app: typer.Typer) -> None:
                 )
                 typer.echo(f"wrote {foxglove} ({n} logged steps)")
             if plot is not None:
-                folder = out if out is not None else logs[0].parent / "replay"
-                written: list[Path] = []
-                if plot in (PlotKind.speed, PlotKind.all):
-                    written.append(plot_speeds(opened, folder / "speeds.png", series=series))
-                if plot in (PlotKind.time_space, PlotKind.all):
-                    for i, (lg, layout) in enumerate(zip(opened, layouts, strict=True)):
-                        data = time_space_points(
-                            lg,
-                            start_s=start,
-                            end_s=end,
-                            vehicles=chosen,
-                            every=plot_stride(lg),
-                            route=layout,
-                        )
-                        suffix = "" if len(opened) == 1 else ("_A", "_B")[i]
-                        written.append(
-                            plot_time_space(
-                                lg, folder / f"time_space{suffix}.png", data=data, route=layout
-                            )
-                        )
-                        if plot is PlotKind.all:
-                            written.append(
-                                plot_vehicle_speeds(
-                                    lg, folder / f"vehicle_speeds{suffix}.png", data=data
-                                )
-                            )
-                if plot in (PlotKind.traffic, PlotKind.all):
-                    for i, (lg, layout) in enumerate(zip(opened, layouts, strict=True)):
-                        suffix = "" if len(opened) == 1 else ("_A", "_B")[i]
-                        traffic = traffic_series(lg, layout, start_s=start, end_s=end)
-                        flow = outflow(list(lg.stats(start, end)))
-                        written.append(
-                            plot_traffic(lg, folder / f"traffic{suffix}.png", traffic, flow)
-                        )
                 if plot is PlotKind.signals and not opened[0].has_signals:
                     signal_series(opened[0])  # raises the readable "no traffic lights" error
-                if plot in (PlotKind.signals, PlotKind.all):
-                    for i, lg in enumerate(opened):
-                        if lg.has_signals:
-                            suffix = "" if len(opened) == 1 else ("_A", "_B")[i]
-                            lights = signal_series(lg, start_s=start, end_s=end)
-                            png = folder / f"signals{suffix}.png"
-                            written.append(plot_signals(lg, png, lights))
+                folder = replay_dir(out, logs)
+                try:
+                    written = _plots(plot, opened, layouts, series, start, end, chosen, folder)
+                except BaseException:
+                    with suppress(OSError):
+                        folder.rmdir()  # only if nothing was written
+                    raise
                 for path in written:
                     typer.echo(f"wrote {path}")
