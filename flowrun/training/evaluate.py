@@ -46,6 +46,8 @@ from flowrun.training.trainer import (
 
 # progress(label, episode, step)
 EvalProgress = Callable[[str, int, int], None]
+#: Whether a stop (Ctrl-C/SIGTERM) was asked; may carry ``exit_code`` (128 + the signal).
+StopAsked = Callable[[], bool]
 MODELS = ("best", "final")
 
 
@@ -155,13 +157,14 @@ def evaluate(
     model: str = "best",
     progress: EvalProgress | None = None,
     out: Path | None = None,
+    should_stop: StopAsked | None = None,
 ) -> EvalResult:
     """Roll out the trained policy and the all-human baseline, ``episodes`` each.
 
     Episode ``i`` of both resets with seed ``sim.seed + i``. Writes ``metrics.json`` (with
     ``status``: ``running``, then ``complete`` or ``interrupted``) and the MCAP logs
     (``policy_<i>.mcap``, ``baseline_<i>.mcap``) to ``<out>/<timestamp>-<seed>/``, ``out``
-    defaulting to ``<run>/eval``.
+    defaulting to ``<run>/eval``. ``should_stop``: see :func:`run_evaluation`.
     """
     from flowrun.training.runstate import run_state
 
@@ -184,7 +187,9 @@ def evaluate(
         return action
 
     head = {"deterministic": deterministic}
-    return run_evaluation(cfg, run_dir, path, status, head, act, episodes, progress, out)
+    return run_evaluation(
+        cfg, run_dir, path, status, head, act, episodes, progress, out, should_stop=should_stop
+    )
 
 
 def run_evaluation(
@@ -198,6 +203,7 @@ def run_evaluation(
     progress: EvalProgress | None,
     out: Path | None,
     wrap: Callable[[Any], Any] | None = None,
+    should_stop: StopAsked | None = None,
 ) -> EvalResult:
     """The evaluation folder of any backend: the policy's and the all-human rollouts of
     ``episodes`` episodes each (episode ``i`` seeded ``sim.seed + i``), their MCAP logs,
@@ -209,6 +215,10 @@ def run_evaluation(
         run_status: the training run's state (:func:`flowrun.training.runstate.run_state`).
         act: the policy, ``obs -> action``.
         wrap: applied to each env before it is stepped (e.g. a multi-agent env's joint view).
+        should_stop: whether Ctrl-C/SIGTERM was received (a
+            :class:`~flowrun.training.runstate.StopRequest`): an error raised after that
+            (the signal also killed netconvert or SUMO) labels the folder ``interrupted``
+            with exit code 128 + the signal, not ``failed``.
     """
     seed = int(cfg.sim.seed or 0)
     out_dir = _eval_dir(run_dir / "eval" if out is None else out, seed)
@@ -228,12 +238,24 @@ def run_evaluation(
         mark_done(out_dir, "interrupted", exit_code=exit_code_of(err))
         raise
     except Exception as err:
-        mark_done(out_dir, "failed", error=f"{type(err).__name__}: {err}", exit_code=1)
+        if should_stop is not None and should_stop():
+            write_json(out_dir / "metrics.json",
+                       {"status": "interrupted", **head, "logs": [p.name for p in logs]})
+            mark_done(out_dir, "interrupted", exit_code=_stop_exit_code(should_stop),
+                      error=f"after the stop signal: {type(err).__name__}: {err}")  # fmt: skip
+        else:
+            mark_done(out_dir, "failed", error=f"{type(err).__name__}: {err}", exit_code=1)
         raise
     result = EvalResult(out_dir, model, rl, human, logs, run_status)
     write_json(out_dir / "metrics.json", {"status": "complete", **head, **result.to_dict()})
     mark_done(out_dir, "complete", exit_code=0)
     return result
+
+
+def _stop_exit_code(should_stop: StopAsked) -> int:
+    """128 + the stop's signal (a ``StopRequest`` knows it); 130 (SIGINT) otherwise."""
+    code = getattr(should_stop, "exit_code", None)
+    return code if isinstance(code, int) else 130
 
 
 def _load_normalize(path: Path) -> Any:

@@ -20,7 +20,13 @@ import numpy as np
 
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, TrainingError
-from flowrun.training.evaluate import EvalProgress, EvalResult, eval_config, run_evaluation
+from flowrun.training.evaluate import (
+    EvalProgress,
+    EvalResult,
+    StopAsked,
+    eval_config,
+    run_evaluation,
+)
 from flowrun.training.rllib.deps import require_ray
 from flowrun.training.rllib.train import BEST_CHECKPOINT, FINAL_CHECKPOINT
 from flowrun.training.runstate import run_state
@@ -133,6 +139,7 @@ def evaluate_rllib(
     model: str = "best",
     progress: EvalProgress | None = None,
     out: Path | None = None,
+    should_stop: StopAsked | None = None,
 ) -> EvalResult:
     """Roll out the RLlib policy and the all-human baseline, ``episodes`` each (as
     :func:`flowrun.training.evaluate`).
@@ -151,6 +158,7 @@ def evaluate_rllib(
         model: ``best``, ``final`` or a checkpoint folder (see :func:`checkpoint_path`).
         progress: called as ``progress(label, episode, step)``.
         out: parent of the evaluation folder (``None``: ``<run>/eval``).
+        should_stop: whether a stop signal came (see :func:`run_evaluation`).
 
     Raises:
         ConfigError: ``episodes`` < 1 or a bad override.
@@ -169,7 +177,7 @@ def evaluate_rllib(
 
     head = {"deterministic": deterministic, "backend": "rllib"}
     return run_evaluation(cfg, run_dir, path, run_state(run_dir), head, act, episodes,
-                          progress, out, wrap=joint)  # fmt: skip
+                          progress, out, wrap=joint, should_stop=should_stop)  # fmt: skip
 
 
 def _actor(
