@@ -31,6 +31,9 @@ def _register_commands() -> None:
 
     commands_replay.register(app)
     commands_train.register(app)
+    from flowrun.cli import commands_benchmark
+
+    commands_benchmark.register(app)
 
 
 _register_commands()

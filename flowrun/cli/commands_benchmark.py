@@ -1,0 +1,226 @@
+"""``flowrun benchmark``: Flow's eleven benchmarks, their baselines over seeds, in one table.
+
+Every baseline run (and, with ``--train``, every training and policy evaluation) is its own
+``flowrun`` process, run by the sweep's process pool (:func:`run_points`): a Ctrl-C reaches
+this command only, which passes it on once to the running processes, writes the results of
+the runs that finished and exits 130 (SIGINT) or 143 (SIGTERM).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import replace
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from flowrun.cli.commands_run import console
+from flowrun.cli.commands_sweep import run_points
+from flowrun.cli.common import (
+    DEFAULT_OUT,
+    OutOpt,
+    SeedOpt,
+    SetOpt,
+    guarded,
+    interrupted_exit,
+)
+from flowrun.errors import ConfigError, FlowrunError
+from flowrun.experiment.benchmark import Benchmark
+from flowrun.experiment.benchmark_run import BenchmarkPlan
+from flowrun.experiment.sweep import SweepPoint
+
+NamesArg = Annotated[
+    list[str] | None,
+    typer.Argument(
+        help="Benchmarks: names (figureeight0 ... bottleneck2), families (figureeight, merge, "
+        "grid, bottleneck) or all.",
+        show_default="all",
+    ),
+]
+
+
+def _point(bench: Benchmark, kind: str, seed: int) -> SweepPoint:
+    return SweepPoint((("benchmark", bench.name), ("run", kind)), seed)
+
+
+def _check_configs(plan: BenchmarkPlan) -> None:
+    """Load every benchmark's config and its baseline before anything runs.
+
+    Raises:
+        ConfigError: a missing or invalid config, or a --set it refuses (naming the benchmark).
+    """
+    from flowrun.config.loader import load_config
+    from flowrun.experiment.baseline import resolve_steps
+
+    for bench in plan.benchmarks:
+        path = bench.config_path(plan.configs)
+        if not path.is_file():
+            raise ConfigError(f"benchmark {bench.name}: no config {path}; pass --configs DIR")
+        try:
+            load_config(path, list(plan.sets))
+            resolve_steps(load_config(path, [*plan.sets, *bench.baseline]), None)
+        except ConfigError as err:
+            raise ConfigError(f"benchmark {bench.name}: {err}") from None
+
+
+@guarded
+def benchmark(
+    names: NamesArg = None,
+    seeds: Annotated[int, typer.Option("--seeds", help="Seeds per benchmark.")] = 1,
+    jobs: Annotated[
+        int | None, typer.Option("--jobs", help="Runs at once (default: CPU count).")
+    ] = None,
+    train: Annotated[
+        bool,
+        typer.Option(
+            "--train",
+            help="Also train each benchmark's policy (its train: section, PPO by default) and "
+            "score it over the same seeds.",
+        ),
+    ] = False,
+    configs: Annotated[
+        Path | None,
+        typer.Option(
+            "--configs",
+            help="Folder of the benchmark configs (default: configs/benchmarks).",
+            show_default=False,
+        ),
+    ] = None,
+    record: Annotated[
+        bool, typer.Option("--record", help="Write MCAP logs of the baseline runs.")
+    ] = False,
+    seed: SeedOpt = None,
+    set_: SetOpt = None,
+    out: OutOpt = DEFAULT_OUT,
+) -> None:
+    """Run Flow's benchmarks: each one's non-RL baseline over --seeds seeds, in parallel.
+
+    Prints one table: benchmark, Flow's metric, mean ± std over seeds, Flow's reference.
+
+    Metrics: mean speed (figure eight, merge), -delay (grid), last 500 s outflow (bottleneck).
+
+    Reference: the score Flow's scripts expect of a trained policy.
+
+    --set applies to every benchmark (e.g. --set env.horizon=50 for a short run).
+
+    Results: OUT/benchmark/<timestamp>/ (results.json, results.md, benchmark.png, run folders).
+
+    Ctrl-C/SIGTERM keeps the finished runs and writes their table (exit 130/143).
+    """
+    from flowrun.experiment import benchmark as bm
+    from flowrun.experiment.benchmark_run import folder_name
+    from flowrun.experiment.rundir import check_out_dir, unique_dir
+
+    chosen = bm.select(names or ["all"])
+    if seeds < 1:
+        raise ConfigError(f"--seeds must be >= 1, got {seeds}")
+    if jobs is not None and jobs < 1:
+        raise ConfigError(f"--jobs must be >= 1, got {jobs}")
+    first = 0 if seed is None else seed
+    plan = BenchmarkPlan(
+        folder=out / "benchmark" / folder_name(),
+        benchmarks=tuple(chosen),
+        seeds=tuple(range(first, first + seeds)),
+        configs=(configs if configs is not None else bm.default_config_dir()).resolve(),
+        sets=tuple(set_ or []),
+        train=train,
+        record=record,
+    )
+    if train:
+        from flowrun.training.deps import require
+
+        require("stable_baselines3")
+    _check_configs(plan)
+    check_out_dir(out)
+    plan = replace(plan, folder=unique_dir(plan.folder).resolve())
+    _run(plan, jobs or os.cpu_count() or 1)
+
+
+def _run(plan: BenchmarkPlan, jobs: int) -> None:
+    """Baselines (and trainings), then the policies' evaluations; then the results."""
+    from flowrun.experiment import benchmark_run as br
+
+    failures: list[str] = []
+    first = [(_point(b, "baseline", s), br.baseline_command(plan, b, s))
+             for b in plan.benchmarks for s in plan.seeds]  # fmt: skip
+    if plan.train:
+        first += [(_point(b, "train", plan.seeds[0]), br.train_command(plan, b))
+                  for b in plan.benchmarks]  # fmt: skip
+    try:
+        _pool(first, jobs, failures)
+        if plan.train:
+            second = []
+            for bench in plan.benchmarks:
+                run_dir = br.train_run(plan, bench)
+                if run_dir is not None:
+                    second.append((_point(bench, "policy", plan.seeds[0]),
+                                   br.policy_command(plan, bench, run_dir)))  # fmt: skip
+            _pool(second, jobs, failures)
+    except KeyboardInterrupt as err:
+        _report(plan, "interrupted")
+        raise interrupted_exit(err, f"finished runs kept in {plan.folder}") from None
+    _report(plan, "complete" if not failures else "failed")
+    if failures:
+        for line in failures:
+            typer.secho(f"failed: {line}", err=True, fg=typer.colors.RED)
+        raise FlowrunError(f"{len(failures)} run(s) failed (above); results in {plan.folder}")
+
+
+def _pool(commands: list[tuple[SweepPoint, list[str]]], jobs: int, failures: list[str]) -> None:
+    if not commands:
+        return
+    columns = (TextColumn("benchmark"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+               TextColumn("{task.fields[last]}"))  # fmt: skip
+    with Progress(*columns, console=console, transient=True,
+                  disable=not sys.stderr.isatty()) as bar:  # fmt: skip
+        task = bar.add_task("benchmark", total=len(commands), last="")
+
+        def on_done(point: SweepPoint, code: int, last: str) -> None:
+            values = dict(point.values)
+            what = f"{values['benchmark']} {values['run']} seed {point.seed}"
+            if code != 0:
+                failures.append(f"{what}: exit {code}: {last}")
+            bar.update(task, advance=1, last=what)
+
+        run_points(commands, jobs, on_done)
+
+
+def _report(plan: BenchmarkPlan, status: str) -> None:
+    """Write results.json / results.md / benchmark.png and print the table."""
+    from flowrun.experiment import benchmark_report as report
+    from flowrun.experiment.benchmark_run import collect
+
+    rows = collect(plan)
+    try:
+        json_path, md_path, plot = report.write_results(plan, rows, sys.argv, status)
+    except OSError as err:
+        raise FlowrunError(f"cannot write results in {plan.folder}: {err.strerror}") from None
+    console.print(results_table(plan, rows))
+    for line in report.notes(rows):
+        console.print(line, highlight=False, markup=False)
+    shown = f"; plot: {plot.name}" if plot is not None else ""
+    console.print(f"results: {json_path} and {md_path.name}{shown}")
+
+
+def results_table(plan: BenchmarkPlan, rows: list[dict[str, Any]]) -> Table:
+    """The terminal table: one row per benchmark."""
+    from flowrun.experiment.benchmark_report import table_rows
+
+    header, cells = table_rows(rows, plan.train)
+    table = Table(title=f"Flow's benchmarks: {len(plan.seeds)} seed(s), {plan.folder}")
+    for col in header:
+        table.add_column(col, justify="left" if col in ("benchmark", "metric") else "right",
+                         overflow="fold")  # fmt: skip
+    for line in cells:
+        table.add_row(*line)
+    return table
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``benchmark`` to the app."""
+    app.command("benchmark")(benchmark)
+
