@@ -247,3 +247,47 @@ def test_no_car_crosses_on_red_and_cars_are_conserved() -> None:
         assert env.k.simulation.collisions == 0
     finally:
         env.close()
+
+
+@pytest.mark.sumo
+def test_commands_before_the_first_read_of_a_step_keep_the_snapshot_sumo_showed() -> None:
+    """The snapshot is read when first asked in a step; commands issued before that still
+    leave every other value as SUMO showed it right after the step."""
+    tl = TrafficLightParams()
+    for i in range(4):
+        tl.add(f"center{i}", phases=PHASES, offset=i)
+    env = grid_env(tl)
+    try:
+        env.reset(seed=0)
+        k = env.k.traffic_light
+        api = env.k.vehicle.api.trafficlight
+        for _ in range(5):
+            env.step(None)
+        after_step = {t: (api.getRedYellowGreenState(t), api.getPhase(t), api.getProgram(t),
+                          api.getNextSwitch(t)) for t in k.get_ids()}  # fmt: skip
+        k.set_state("center0", "rGrG")
+        k.set_state("center1", "y", link_index=2)
+        with pytest.raises(ValueError, match="controls 4 links"):
+            k.set_state("center2", "GrG")
+        with pytest.raises(Exception, match="nosuch"):
+            k.set_program("center3", "nosuch")
+        state1 = after_step["center1"][0]
+        expected = {
+            "center0": ("rGrG", after_step["center0"][1], "online", after_step["center0"][3]),
+            "center1": (state1[:2] + "y" + state1[3:], after_step["center1"][1], "online",
+                        after_step["center1"][3]),
+            "center2": after_step["center2"],
+            "center3": after_step["center3"],
+        }  # fmt: skip
+        seen = {t: (k.get_state(t), k.get_phase(t), k.get_program(t), k.get_next_switch(t))
+                for t in k.get_ids()}  # fmt: skip
+        assert seen == expected
+        assert api.getRedYellowGreenState("center0") == "rGrG"  # and SUMO has the commands
+        assert api.getRedYellowGreenState("center1") == expected["center1"][0]
+        env.step(None)  # the next step's snapshot is SUMO's again
+        assert [k.get_state(t) for t in k.get_ids()] == [
+            api.getRedYellowGreenState(t) for t in k.get_ids()
+        ]
+        assert k.time == env.k.simulation.time
+    finally:
+        env.close()

@@ -69,18 +69,29 @@ class SwitchTimers:
         Returns:
             ``(light, direction, yellow)`` of each light whose state must change now.
         """
+        # plain Python floats in the loop (the same IEEE arithmetic as the arrays', without
+        # numpy's per-element cost), written back once
+        last, direction, yellow = (
+            self.last_change.tolist(), self.direction.tolist(), self.currently_yellow.tolist()
+        )
+        asked = switch.tolist() if isinstance(switch, np.ndarray) else list(switch)
+        dt, switch_time = self.dt, self.switch_time
         changes = []
-        for i in range(self.n):
-            if self.currently_yellow[i] == 1:
-                self.last_change[i] += self.dt
-                if self.last_change[i] >= self.switch_time:
-                    self.currently_yellow[i] = 0
-                    changes.append((i, int(self.direction[i]), False))
-            elif switch[i]:
-                changes.append((i, int(self.direction[i]), True))  # yellow for the old green
-                self.last_change[i] = 0.0
-                self.direction[i] = 1 - self.direction[i]
-                self.currently_yellow[i] = 1
+        for i, is_yellow in enumerate(yellow):
+            if is_yellow == 1:
+                last[i] += dt
+                if last[i] >= switch_time:
+                    yellow[i] = 0.0
+                    changes.append((i, int(direction[i]), False))
+            elif asked[i]:
+                changes.append((i, int(direction[i]), True))  # yellow for the old green
+                last[i] = 0.0
+                direction[i] = 1 - direction[i]
+                yellow[i] = 1.0
+        self.last_change[:] = last
+        if changes:
+            self.direction[:] = direction
+            self.currently_yellow[:] = yellow
         return changes
 
     def features(self) -> FloatArray:

@@ -92,6 +92,7 @@ class TrafficLightGridEnv(Env):
         self.max_dist = max(e.length for e in spec.edges)
         self.num_edges = int(getattr(self.network, "num_edges", len(spec.edges)))
         self._vertical: list[list[bool]] = []
+        self._phase_states: list[list[str]] = []
         self._acted = False
         self._reentry = reentry_edges(self.rows, self.cols)
 
@@ -141,9 +142,13 @@ class TrafficLightGridEnv(Env):
             [lane.split("_")[0].rstrip("0123456789").startswith(_VERTICAL) for lane in
              tk.get_controlled_lanes(t)] for t in self.light_ids
         ]  # fmt: skip
+        # each light's four states, at 2 * direction + yellow
+        self._phase_states = [
+            [phase_state(v, d, y) for d in (0, 1) for y in (False, True)] for v in self._vertical
+        ]
         if self.tl_type != "actuated":
             for i, light in enumerate(self.light_ids):
-                tk.set_state(light, phase_state(self._vertical[i], 0, False))
+                tk.set_state(light, self._phase_states[i][0])
             obs = self._format_obs(self.get_state())
         return obs, info
 
@@ -159,9 +164,9 @@ class TrafficLightGridEnv(Env):
 
     def _update_lights(self, switch: np.ndarray) -> None:
         self._acted = True
-        tk = self.k.traffic_light
+        set_state, ids, states = self.k.traffic_light.set_state, self.light_ids, self._phase_states
         for i, direction, yellow in self.timers.step(switch):
-            tk.set_state(self.light_ids[i], phase_state(self._vertical[i], direction, yellow))
+            set_state(ids[i], states[i][2 * direction + yellow])
 
     def additional_command(self) -> None:
         """Yellow timers run on steps without an action too; cars on exit edges re-enter."""

@@ -1,9 +1,12 @@
 """Flow's ``k.traffic_light``: every signal's state, read once per step, and commands.
 
 The getters read the per-step snapshot (state string, phase index, program id, time of the
-next switch) taken after each simulation step, as ``k.vehicle``'s do. ``set_state`` sends
-the new state to SUMO at once (Flow's ``setRedYellowGreenState`` / ``setLinkState``) and
-updates the snapshot, so a getter sees what SUMO will show in the next step.
+next switch) of the current simulation step, as ``k.vehicle``'s do. The snapshot is taken when
+first asked after a step (a step nobody asks about - an env that keeps its own signal
+bookkeeping, recording off - reads nothing), and before any command of that step, so it is
+the state SUMO showed right after the step. ``set_state`` sends the new state to SUMO at once
+(Flow's ``setRedYellowGreenState`` / ``setLinkState``) and updates the snapshot, so a getter
+sees what SUMO will show in the next step.
 """
 
 from __future__ import annotations
@@ -26,11 +29,14 @@ class TrafficLightKernel:
         self._ids: list[str] = []
         self._index: dict[str, int] = {}
         self._links: list[list[tuple[str, str, str]]] = []
-        self.states: list[str] = []
-        self.phases = np.zeros(0, dtype=np.int64)
-        self.next_switch = np.zeros(0)
-        self.programs: list[str] = []
-        self.time = 0.0
+        self._states: list[str] = []
+        self._phases = np.zeros(0, dtype=np.int64)
+        self._next_switch = np.zeros(0)
+        self._programs: list[str] = []
+        self._time = 0.0
+        self._stale = False  # the snapshot is of an earlier step: read it when first asked
+        self._valid_states: set[str] = set()  # state strings set_state has checked
+        self._pinned: dict[int, list[Any]] = {}  # see _pin
 
     # ------------------------------------------------------------------ kernel side
     def attach(self, api: Any) -> None:
@@ -44,29 +50,88 @@ class TrafficLightKernel:
             links = tl.getControlledLinks(t)
             self._links.append([tuple(group[0]) if group else ("", "", "") for group in links])
         n = len(self._ids)
-        self.states = [""] * n
-        self.programs = [""] * n
-        self.phases = np.zeros(n, dtype=np.int64)
-        self.next_switch = np.zeros(n)
-        self._get_state = tl.getRedYellowGreenState
-        self._get_phase = tl.getPhase
-        self._get_program = tl.getProgram
-        self._get_next = tl.getNextSwitch
-        self._get_time = api.simulation.getTime
+        self._states = [""] * n
+        self._programs = [""] * n
+        self._phases = np.zeros(n, dtype=np.int64)
+        self._next_switch = np.zeros(n)
+        # libsumo's compiled calls where there are (its Python wrappers add a call layer)
+        raw = getattr(api, "_libsumo", None)
+        if raw is not None and hasattr(raw, "trafficlight_getRedYellowGreenState"):
+            self._get_state = raw.trafficlight_getRedYellowGreenState
+            self._get_phase = raw.trafficlight_getPhase
+            self._get_program = raw.trafficlight_getProgram
+            self._get_next = raw.trafficlight_getNextSwitch
+            self._get_time = raw.simulation_getTime
+            self._set_state = raw.trafficlight_setRedYellowGreenState
+        else:
+            self._get_state = tl.getRedYellowGreenState
+            self._get_phase = tl.getPhase
+            self._get_program = tl.getProgram
+            self._get_next = tl.getNextSwitch
+            self._get_time = api.simulation.getTime
+            self._set_state = tl.setRedYellowGreenState
         self.update()
 
     def update(self) -> None:
-        """Read every light's state, phase, program and next switch time (once per step)."""
-        if not self._ids:
-            self.time = float(self._get_time()) if self.api is not None else 0.0
+        """Mark the snapshot stale after a simulation step: every light's state, phase,
+        program and next switch time are read when first asked (once per step)."""
+        self._stale = self.api is not None
+        self._pinned.clear()
+
+    def _read(self) -> None:
+        """Read every light's state, phase, program and next switch time, and the time."""
+        self._stale = False
+        self._time = float(self._get_time())
+        ids = self._ids
+        if not ids:
             return
-        self.time = float(self._get_time())
-        gs, gp, gpr, gn = self._get_state, self._get_phase, self._get_program, self._get_next
-        for i, t in enumerate(self._ids):
-            self.states[i] = gs(t)
-            self.phases[i] = gp(t)
-            self.programs[i] = gpr(t)
-            self.next_switch[i] = gn(t)
+        self._states[:] = map(self._get_state, ids)
+        self._programs[:] = map(self._get_program, ids)
+        self._phases[:] = list(map(self._get_phase, ids))
+        self._next_switch[:] = list(map(self._get_next, ids))
+        for row, (state, phase, program, next_switch) in self._pinned.items():
+            self._phases[row], self._next_switch[row] = phase, next_switch
+            if state:  # "": no command set it (one that failed): as just read
+                self._states[row] = state
+            if program:
+                self._programs[row] = program
+        self._pinned.clear()
+
+    # ------------------------------------------------------------------ the snapshot
+    @property
+    def states(self) -> list[str]:
+        """Every light's state string, in :meth:`get_ids` order (updated in place each step)."""
+        if self._stale:
+            self._read()
+        return self._states
+
+    @property
+    def phases(self) -> np.ndarray:
+        """Every light's phase index, in :meth:`get_ids` order."""
+        if self._stale:
+            self._read()
+        return self._phases
+
+    @property
+    def programs(self) -> list[str]:
+        """Every light's running program id, in :meth:`get_ids` order."""
+        if self._stale:
+            self._read()
+        return self._programs
+
+    @property
+    def next_switch(self) -> np.ndarray:
+        """Every light's time of the next phase switch, s, in :meth:`get_ids` order."""
+        if self._stale:
+            self._read()
+        return self._next_switch
+
+    @property
+    def time(self) -> float:
+        """Simulation time of the snapshot, s."""
+        if self._stale:
+            self._read()
+        return self._time
 
     def _row(self, node_id: str) -> int:
         row = self._index.get(node_id)
@@ -115,6 +180,22 @@ class TrafficLightKernel:
         return [link[0] for link in self._links[self._row(node_id)]]
 
     # ------------------------------------------------------------------ commands
+    def _pin(self, row: int, need_state: bool) -> list[Any]:
+        """A command on light ``row`` while the snapshot is stale: that light's snapshot
+        as SUMO showed it after the step (``[state, phase, program, next switch]``), read
+        now, before the command; the command's changes go into it and it overrides the
+        light's row when the whole snapshot is read. Every command sets the program, and
+        the state unless ``need_state``: those are not read."""
+        pin = self._pinned.get(row)
+        if pin is None:
+            t = self._ids[row]
+            state = self._get_state(t) if need_state else ""
+            pin = [state, self._get_phase(t), "", self._get_next(t)]  # "": as read later
+            self._pinned[row] = pin
+        elif need_state and not pin[0]:
+            pin[0] = self._get_state(self._ids[row])
+        return pin
+
     def set_state(self, node_id: str, state: str, link_index: int | str = "all") -> None:
         """Set the light's state (``link_index="all"``) or one link's signal character.
 
@@ -124,18 +205,20 @@ class TrafficLightKernel:
         """
         row = self._row(node_id)
         n = len(self._links[row])
-        bad = sorted(set(state) - _STATE_CHARS)
-        if bad:
-            raise ValueError(f"unknown signal character(s) {bad} in {state!r} for {node_id!r}")
-        tl = self.api.trafficlight
-        if link_index == "all":
+        if state not in self._valid_states:
+            bad = sorted(set(state) - _STATE_CHARS)
+            if bad:
+                raise ValueError(
+                    f"unknown signal character(s) {bad} in {state!r} for {node_id!r}"
+                )
+            self._valid_states.add(state)
+        whole = link_index == "all"
+        if whole:
             if len(state) != n:
                 raise ValueError(
                     f"state {state!r} has {len(state)} characters; light {node_id!r} "
                     f"controls {n} links"
                 )
-            tl.setRedYellowGreenState(node_id, state)
-            self.states[row] = state
         else:
             index = int(link_index)
             if len(state) != 1 or not 0 <= index < n:
@@ -143,13 +226,26 @@ class TrafficLightKernel:
                     f"set_state with link_index={link_index!r} needs one character and an "
                     f"index in [0, {n}), got {state!r}"
                 )
-            tl.setLinkState(node_id, index, state)
-            current = self.states[row]
-            self.states[row] = current[:index] + state + current[index + 1 :]
-        self.programs[row] = "online"
+        pin = self._pin(row, need_state=not whole) if self._stale else None
+        if whole:
+            self._set_state(node_id, state)
+            new = state
+        else:
+            self.api.trafficlight.setLinkState(node_id, index, state)
+            current = self._states[row] if pin is None else pin[0]
+            new = current[:index] + state + current[index + 1 :]
+        if pin is None:
+            self._states[row] = new
+            self._programs[row] = "online"
+        else:
+            pin[0], pin[2] = new, "online"
 
     def set_program(self, node_id: str, program_id: str) -> None:
         """Switch the light to one of its loaded programs."""
-        self._row(node_id)
+        row = self._row(node_id)
+        pin = self._pin(row, need_state=True) if self._stale else None
         self.api.trafficlight.setProgram(node_id, program_id)
-        self.programs[self._row(node_id)] = program_id
+        if pin is None:
+            self._programs[row] = program_id
+        else:
+            pin[2] = program_id
