@@ -5,20 +5,20 @@ process), in its own session, so a Ctrl-C reaches the sweep only; the sweep then
 signal on once to each running point, which finishes its log and labels its folder
 ``interrupted``, and exits 130 (SIGINT) or 143 (SIGTERM). Finished points are kept; the same
 command again skips them.
+
+With ``--backend ray`` (or ``--ray-address``) the same commands run as Ray tasks on a Ray
+cluster (:mod:`flowrun.experiment.sweep_ray`), with the same folders, table and stopping.
 """
 
 from __future__ import annotations
 
 import os
-import signal
-import subprocess
 import sys
-import tempfile
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from pathlib import Path
-from typing import IO, Annotated, Any
+from typing import Annotated, Any
 
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -39,6 +39,15 @@ from flowrun.cli.common import (
 from flowrun.errors import ConfigError, FlowrunError
 from flowrun.experiment.rundir import Interrupted
 from flowrun.experiment.sweep import SweepPlan, SweepPoint
+from flowrun.experiment.sweep_procs import PointProcess
+from flowrun.experiment.sweep_ray import NOT_STARTED
+
+#: How a sweep runs its points: ``local`` processes, or ``ray`` tasks.
+BACKENDS = ("local", "ray")
+#: Called as each point ends: ``(point, exit code, last stderr line)``.
+OnDone = Callable[[SweepPoint, int, str], None]
+#: Runs the points: ``(commands, jobs, on_done)``, like :func:`run_points`.
+Runner = Callable[[list[tuple[SweepPoint, list[str]]], int, OnDone], None]
 
 #: Seconds between two looks at the running points.
 POLL_S = 0.1
@@ -58,38 +67,12 @@ def _stop_requests() -> Iterator[list[int]]:
         yield received
 
 
-def _term_with_parent() -> None:
-    """In a point's process (Linux): SIGTERM when the sweep dies, even by SIGKILL, so no point
-    runs on unsupervised; it then finishes its log and says ``interrupted``."""
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-
-
-class _Job:
-    """One running point: its process and where its stderr goes."""
+class PointProcessJob(PointProcess):
+    """One running point of a local sweep: the point and its process."""
 
     def __init__(self, point: SweepPoint, cmd: list[str]) -> None:
+        super().__init__(cmd)
         self.point = point
-        self.stderr: IO[bytes] = tempfile.TemporaryFile()  # noqa: SIM115 - closed in result()
-        self.proc = subprocess.Popen(
-            cmd,
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,
-            stderr=self.stderr,
-            start_new_session=True,  # a terminal's Ctrl-C reaches the sweep, not the points
-            preexec_fn=_term_with_parent,
-        )
-
-    def result(self) -> tuple[int, str]:
-        """Exit code and the last line of stderr (the point's one-line error)."""
-        code = self.proc.wait()
-        self.stderr.seek(0)
-        lines = self.stderr.read().decode(errors="replace").strip().splitlines()
-        self.stderr.close()
-        return code, lines[-1] if lines else ""
 
 
 def run_points(
@@ -103,12 +86,12 @@ def run_points(
         Interrupted: Ctrl-C/SIGTERM came; the running points got the signal and finished.
     """
     todo = list(commands)
-    running: list[_Job] = []
+    running: list[PointProcessJob] = []
     with _stop_requests() as stop:
         while (todo or running) and not stop:
             while todo and len(running) < jobs and not stop:
                 point, cmd = todo.pop(0)
-                running.append(_Job(point, cmd))
+                running.append(PointProcessJob(point, cmd))
             for job in [j for j in running if j.proc.poll() is not None]:
                 running.remove(job)
                 on_done(job.point, *job.result())
@@ -119,7 +102,7 @@ def run_points(
 
 
 def _stop(
-    running: list[_Job], stop: list[int], on_done: Callable[[SweepPoint, int, str], None]
+    running: list[PointProcessJob], stop: list[int], on_done: Callable[[SweepPoint, int, str], None]
 ) -> None:
     """Pass the first signal on to the running points and wait for them to finish their logs;
     a second signal (or ``STOP_GRACE_S`` seconds) kills them."""
@@ -208,6 +191,22 @@ def sweep(
     ] = None,
     runs: Annotated[int, typer.Option("--runs", help="Runs per point.")] = 1,
     no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
+    backend: Annotated[
+        str | None,
+        typer.Option(
+            "--backend",
+            help="local: processes on this machine; ray: Ray tasks on a Ray cluster "
+            "[default: local, or ray with --ray-address].",
+        ),
+    ] = None,
+    ray_address: Annotated[
+        str | None,
+        typer.Option(
+            "--ray-address",
+            help="Ray cluster to run the points on (implies --backend ray) "
+            "[default with --backend ray: $RAY_ADDRESS, else a local Ray].",
+        ),
+    ] = None,
     seed: SeedOpt = None,
     set_: SetOpt = None,
     out: OutOpt = DEFAULT_OUT,
@@ -219,6 +218,9 @@ def sweep(
     Then results.csv, results.md and <metric>.png (mean and std over seeds vs the first key).
 
     Ctrl-C/SIGTERM keeps finished points (exit 130/143); the same command runs only the rest.
+
+    With --backend ray (or --ray-address) each point is a Ray task (one CPU, its own SUMO
+    process); on several machines the config and --out must be on a shared file system.
     """
     from flowrun.config.flow_module import load_any_config
     from flowrun.experiment import sweep as sw
@@ -230,6 +232,7 @@ def sweep(
         raise ConfigError(f"--jobs must be >= 1, got {jobs}")
     if runs < 1:
         raise ConfigError(f"--runs must be >= 1, got {runs}")
+    chosen = _backend(backend, ray_address)
     sets = list(set_ or [])
     cfg = load_any_config(config, overrides_with_seed(sets, seed))
     run_args = [*(["--steps", str(steps)] if steps is not None else []), "--runs", str(runs)]
@@ -238,9 +241,10 @@ def sweep(
     _check_points(config, sets, plan, steps)
     check_out_dir(out)
     try:
-        with sw.locked(plan):
+        with _cluster(chosen, ray_address) as cpus, sw.locked(plan):
             sw.write_plan(plan, sys.argv)
-            _run_sweep(config, sets, plan, out, run_args, jobs, metric)
+            runner = _ray_runner(chosen)
+            _run_sweep(config, sets, plan, out, run_args, jobs or cpus, metric, runner)
     except OSError as err:
         raise FlowrunError(f"cannot write sweep folder {plan.folder}: {err.strerror}") from None
 
@@ -253,8 +257,10 @@ def _run_sweep(
     run_args: list[str],
     jobs: int | None,
     metric: str,
+    runner: Runner | None = None,
 ) -> None:
-    """Run the points not done yet, then write and print the results."""
+    """Run the points not done yet (with ``runner``, default :func:`run_points`), then write
+    and print the results."""
     from flowrun.experiment import sweep as sw
 
     todo = [p for p in plan.points if sw.finished_folder(plan, p) is None]
@@ -270,12 +276,14 @@ def _run_sweep(
         task = bar.add_task("sweep", total=len(plan.points), completed=skipped, last="")
 
         def on_done(point: SweepPoint, code: int, last: str) -> None:
+            if code == NOT_STARTED:
+                return
             if code != 0:
                 failures.append(f"{point.label}: exit {code}: {last}")
             bar.update(task, advance=1, last=point.label)
 
         try:
-            run_points(commands, jobs or os.cpu_count() or 1, on_done)
+            (runner or run_points)(commands, jobs or os.cpu_count() or 1, on_done)
         except KeyboardInterrupt as err:
             _report(plan, metric)
             raise interrupted_exit(
@@ -286,6 +294,60 @@ def _run_sweep(
         for line in failures:
             typer.secho(f"failed: {line}", err=True, fg=typer.colors.RED)
         raise FlowrunError(f"{len(failures)} of {len(plan.points)} point(s) failed (above)")
+
+
+def _backend(backend: str | None, ray_address: str | None) -> str:
+    """``local`` or ``ray``: ``--backend``, else ``ray`` when ``--ray-address`` is given.
+
+    Raises:
+        ConfigError: an unknown backend, or ``--ray-address`` with ``--backend local``.
+    """
+    if backend is None:
+        return "ray" if ray_address else "local"
+    if backend not in BACKENDS:
+        from flowrun.suggest import unknown_name
+
+        raise ConfigError(unknown_name("--backend", backend, BACKENDS))
+    if backend == "local" and ray_address:
+        raise ConfigError(
+            "--ray-address runs the points on Ray: drop --backend local, or drop --ray-address"
+        )
+    return backend
+
+
+def _cluster(backend: str, address: str | None) -> AbstractContextManager[int | None]:
+    """For ``ray``: attach to the cluster (or start a local Ray) for the sweep; yields its
+    CPU count (the default --jobs). For ``local``: nothing, yields ``None``."""
+    if backend != "ray":
+        return nullcontext(None)
+
+    @contextmanager
+    def attached() -> Iterator[int | None]:
+        from flowrun.training.rllib.cluster import ray_session
+
+        with ray_session(address, purpose="flowrun sweep --backend ray", rllib=False) as session:
+            yield max(1, int(session.cpus))
+
+    return attached()
+
+
+def _ray_runner(backend: str) -> Runner | None:
+    """The Ray runner of the points (``None``: local processes)."""
+    if backend != "ray":
+        return None
+    from flowrun.experiment.sweep_ray import run_points_on_ray
+
+    def runner(
+        commands: list[tuple[SweepPoint, list[str]]],
+        jobs: int,
+        on_done: Callable[[SweepPoint, int, str], None],
+    ) -> None:
+        with _stop_requests() as stop:
+            run_points_on_ray(commands, jobs, on_done, stop, STOP_GRACE_S)
+            if stop:
+                raise Interrupted(stop[0])
+
+    return runner
 
 
 def _report(plan: SweepPlan, metric: str) -> None:

@@ -108,7 +108,9 @@ def send_token_if_available() -> None:
 
 
 @contextmanager
-def ray_session(address: str | None = None) -> Iterator[RaySession]:
+def ray_session(
+    address: str | None = None, purpose: str = "train.backend: rllib", rllib: bool = True
+) -> Iterator[RaySession]:
     """Attach to a Ray cluster, or start a local Ray sized to this machine, for a block.
 
     Ray already initialised in this process (e.g. by a test or a notebook) is used as it is
@@ -118,11 +120,13 @@ def ray_session(address: str | None = None) -> Iterator[RaySession]:
     Args:
         address: the cluster address; ``None`` reads ``RAY_ADDRESS`` and without it starts a
             local instance.
+        purpose: what needs Ray, for the error of a missing extra.
+        rllib: whether RLlib is needed (``flowrun sweep`` on Ray needs Ray core only).
 
     Raises:
         TrainingError: the rllib extra is missing, or the cluster cannot be reached.
     """
-    ray = require_ray()
+    ray = require_ray(purpose, rllib)
     if ray.is_initialized():
         yield RaySession("existing", float(ray.cluster_resources().get("CPU", 1.0)))
         return

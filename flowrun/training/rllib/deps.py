@@ -11,8 +11,13 @@ from flowrun.errors import TrainingError
 INSTALL_HINT = "pip install torch==2.13.0 && pip install 'flowrun[rllib]'"
 
 
-def require_ray() -> ModuleType:
-    """Import Ray with RLlib (and torch, RLlib's framework here), or say how to install them.
+def require_ray(purpose: str = "train.backend: rllib", rllib: bool = True) -> ModuleType:
+    """Import Ray (with RLlib and torch, RLlib's framework here, unless ``rllib`` is false), or
+    say how to install them.
+
+    Args:
+        purpose: what needs Ray, for the error message.
+        rllib: whether RLlib and torch are needed too (a sweep on Ray needs Ray core only).
 
     Returns:
         the ``ray`` module.
@@ -21,12 +26,12 @@ def require_ray() -> ModuleType:
         TrainingError: Ray, RLlib or torch is not installed.
     """
     try:
-        importlib.import_module("torch")
-        importlib.import_module("ray.rllib")
+        for name in ("torch", "ray.rllib") if rllib else ("ray",):
+            importlib.import_module(name)
     except ModuleNotFoundError as err:
         missing = err.name or "ray"
         raise TrainingError(
-            f"train.backend: rllib needs the 'rllib' extra, but the module '{missing}' is not "
+            f"{purpose} needs the 'rllib' extra, but the module '{missing}' is not "
             f"installed; install it with: {INSTALL_HINT}"
         ) from None
     return importlib.import_module("ray")
