@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from flowrun.config.compat import no_internal_links, removed_keywords
 from flowrun.config.inflows import InFlow as InFlow
 from flowrun.config.inflows import InFlows as InFlows
 from flowrun.config.modes import LANE_CHANGE_MODES as LANE_CHANGE_MODES
@@ -128,6 +129,7 @@ class EnvParams:
         return self.additional_params[key]
 
 
+@removed_keywords({"no_internal_links": no_internal_links})
 @dataclass
 class NetParams:
     """Network parameters (Flow's ``NetParams``). Mutable, as in Flow
@@ -140,6 +142,10 @@ class NetParams:
         template: a SUMO ``.net.xml`` path, or Flow's dict ``{"net": ..., "rou": [...],
             "vtype": [...]}``, for a network read from files.
         osm_path: an OpenStreetMap file to import with netconvert.
+
+    Flow's 2019 keyword ``no_internal_links`` is accepted when false, with a deprecation
+    warning (junction-internal links are always built where roads meet, as Flow does since),
+    and refused when true; see :func:`flowrun.config.compat.no_internal_links`.
     """
 
     additional_params: dict[str, Any] = field(default_factory=dict)

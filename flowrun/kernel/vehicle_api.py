@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from flowrun.kernel.lane_neighbours import LaneGraphView, LaneNeighbours, lane_neighbours
+
 if TYPE_CHECKING:
     from flowrun.kernel.population import Population, VehicleTable
     from flowrun.networks.base import NetworkSpec
@@ -24,6 +26,21 @@ ERROR = -1001.0
 
 #: Flow's vehicle colours (red, green, blue).
 RED, CYAN, WHITE = (255, 0, 0), (0, 255, 255), (255, 255, 255)
+
+
+def without_removed(
+    cmd: np.ndarray, table: Population, removed: Iterable[str], back: Iterable[str]
+) -> np.ndarray:
+    """``cmd`` (one acceleration per row) with no command (NaN) for the cars removed this
+    step and not put back: Flow commands only the cars it still lists, and a car re-added
+    with ``k.vehicle.add`` is a new car SUMO has not inserted yet (``back``)."""
+    again = set(back)
+    rows = [table.row(v) for v in removed if v in table and v not in again]
+    if not rows:
+        return cmd
+    cmd = cmd.copy()
+    cmd[rows] = np.nan
+    return cmd
 
 
 class FlowVehicleGetters:
@@ -55,6 +72,7 @@ class FlowVehicleGetters:
     #: set by the environment: Flow's per-vehicle controller objects
     controllers: Any = None
     _edges_cache: list[str] | None
+    _pending_removal: list[str]
     _stale_edges: bool
 
     @property
@@ -76,33 +94,47 @@ class FlowVehicleGetters:
     # ------------------------------------------------------------------ Flow's getters
     @property
     def num_vehicles(self) -> int:
-        """Number of vehicles in the network."""
-        return self.table.size
+        """Number of vehicles in the network (a car removed this step no longer counts)."""
+        return self.table.size - len(self._removed())
 
     @property
     def num_rl_vehicles(self) -> int:
         """Number of RL vehicles in the network."""
-        return int(self.table.is_rl.sum())
+        return len(self.get_rl_ids()) if self._pending_removal else int(self.table.is_rl.sum())
+
+    def _removed(self) -> set[str]:
+        """Ids taken out with :meth:`remove` this step: gone for Flow's getters at once, as in
+        Flow, although their rows leave the arrays only at the next simulation step."""
+        return set(self._pending_removal) if self._pending_removal else set()
+
+    def _present(self, ids: list[str]) -> list[str]:
+        gone = self._removed()
+        return [vid for vid in ids if vid not in gone] if gone else ids
 
     def get_ids(self) -> list[str]:
         """All vehicle ids, in placement order."""
-        return list(self.table.ids)
+        return self._present(list(self.table.ids))
 
     def get_rl_ids(self) -> list[str]:
         """Ids of the vehicles the RL agent drives."""
-        return [vid for vid, rl in zip(self.table.ids, self.table.is_rl, strict=True) if rl]
+        ids = self.table.ids
+        return self._present([vid for vid, rl in zip(ids, self.table.is_rl, strict=True) if rl])
 
     def get_human_ids(self) -> list[str]:
         """Ids of all vehicles the agent does not drive."""
-        return [vid for vid, rl in zip(self.table.ids, self.table.is_rl, strict=True) if not rl]
+        ids = self.table.ids
+        return self._present(
+            [vid for vid, rl in zip(ids, self.table.is_rl, strict=True) if not rl]
+        )
 
     def get_controlled_ids(self) -> list[str]:
         """Ids of human vehicles whose acceleration a flowrun controller sets."""
-        return [self.table.ids[i] for i in np.flatnonzero(self.table.commanded)]
+        return self._present([self.table.ids[i] for i in np.flatnonzero(self.table.commanded)])
 
     def get_controlled_lc_ids(self) -> list[str]:
         """Ids of vehicles whose lane changes a flowrun lane-change controller decides."""
-        return [self.table.ids[i] for i in np.flatnonzero(self.table.lane_controlled)]
+        rows = np.flatnonzero(self.table.lane_controlled)
+        return self._present([self.table.ids[i] for i in rows])
 
     # ------------------------------------------------------------------ controllers
     def get_acc_controller(self, veh_id: str) -> Any:
@@ -358,79 +390,81 @@ class FlowVehicleGetters:
         return sum(counts) * 3600.0 / (len(counts) * self.dt)
 
     # ------------------------------------------------------------------ lanes around a car
-    def _edge_neighbours(self, veh_id: str) -> tuple[np.ndarray, np.ndarray, int]:
-        """Rows of the cars on the same edge, their lanes, and the edge's lane count."""
-        edges = self.edges
-        row = self.table.row(veh_id)
-        edge = edges[row]
-        same = np.fromiter((e == edge for e in edges), bool, len(edges))
-        rows = np.flatnonzero(same)
-        num_lanes = int(self.lanes[rows].max(initial=0)) + 1
-        num = getattr(self, "_num_lanes", None)
-        if num is not None:
-            num_lanes = max(num_lanes, int(num(edge)))
-        return rows, self.lanes[rows], num_lanes
-
     def get_lane_leaders(self, veh_id: str) -> list[str]:
-        """The nearest car ahead on each lane of the car's edge (``""`` where none)."""
-        return [self._ids_or_blank(j) for j in self._lane_neighbours(veh_id, ahead=True)[0]]
+        """The nearest car ahead on each lane of the car's edge, or on the lanes those lead
+        to (``""`` where none); Flow's rule, see :mod:`flowrun.kernel.lane_neighbours`."""
+        return [self._ids_or_blank(j) for j in self._lane_neighbours(veh_id).leaders]
 
     def get_lane_headways(self, veh_id: str) -> list[float]:
-        """Gap to the nearest car ahead on each lane of the car's edge, m (``inf``: none)."""
-        return self._lane_neighbours(veh_id, ahead=True)[1]
+        """Gap to the lane leader on each lane, m (Flow's 1000 where none)."""
+        return self._lane_neighbours(veh_id).headways
 
     def get_lane_followers(self, veh_id: str) -> list[str]:
-        """The nearest car behind on each lane of the car's edge (``""`` where none)."""
-        return [self._ids_or_blank(j) for j in self._lane_neighbours(veh_id, ahead=False)[0]]
+        """The nearest car behind on each lane of the car's edge, or on the lanes leading
+        into them (``""`` where none)."""
+        return [self._ids_or_blank(j) for j in self._lane_neighbours(veh_id).followers]
 
     def get_lane_tailways(self, veh_id: str) -> list[float]:
-        """Gap to the nearest car behind on each lane of the car's edge, m (``inf``: none)."""
-        return self._lane_neighbours(veh_id, ahead=False)[1]
+        """Gap to the lane follower on each lane, m (Flow's 1000 where none)."""
+        return self._lane_neighbours(veh_id).tailways
 
     def get_lane_leaders_speed(self, veh_id: str) -> list[float]:
-        """Speed of the nearest car ahead on each lane (0 where none), m/s."""
-        rows = self._lane_neighbours(veh_id, ahead=True)[0]
+        """Speed of the lane leader on each lane (0 where none), m/s."""
+        rows = self._lane_neighbours(veh_id).leaders
         return [float(self.speed[j]) if j >= 0 else 0.0 for j in rows]
 
     def get_lane_followers_speed(self, veh_id: str) -> list[float]:
-        """Speed of the nearest car behind on each lane (0 where none), m/s."""
-        rows = self._lane_neighbours(veh_id, ahead=False)[0]
+        """Speed of the lane follower on each lane (0 where none), m/s."""
+        rows = self._lane_neighbours(veh_id).followers
         return [float(self.speed[j]) if j >= 0 else 0.0 for j in rows]
 
-    def _lane_neighbours(self, veh_id: str, ahead: bool) -> tuple[list[int], list[float]]:
-        """Per lane of the car's edge: the nearest car ahead/behind on the same edge and the
-        bumper-to-bumper gap to it. On the car's own lane this is its leader / follower (which
-        may be past the edge's end)."""
-        me = self.table.row(veh_id)
-        rows, lanes, num_lanes = self._edge_neighbours(veh_id)
-        pos, lengths = self.lane_pos, self.table.lengths
-        found: list[int] = []
-        gaps: list[float] = []
-        for lane in range(num_lanes):
-            if lane == int(self.lanes[me]):
-                j = int(self.leader[me] if ahead else self.follower[me])
-                found.append(j)
-                gap = self.headway[me] if ahead else self.tailway[me]
-                gaps.append(float(gap) if j >= 0 else math.inf)
-                continue
-            on = rows[lanes == lane]
-            if ahead:
-                on = on[pos[on] > pos[me]]
-                j = int(on[np.argmin(pos[on])]) if on.size else -1
-                gap = pos[j] - lengths[j] - pos[me] if j >= 0 else math.inf
-            else:
-                on = on[pos[on] <= pos[me]]
-                j = int(on[np.argmax(pos[on])]) if on.size else -1
-                gap = pos[me] - lengths[me] - pos[j] if j >= 0 else math.inf
-            found.append(j)
-            gaps.append(float(gap))
-        return found, gaps
+    def _lane_neighbours(self, veh_id: str) -> LaneNeighbours:
+        edges = self.edges
+        return lane_neighbours(
+            self.table.row(veh_id), edges, self.lanes, self.lane_pos, self.table.lengths,
+            self._lane_graph(),
+        )  # fmt: skip
+
+    def _lane_graph(self) -> LaneGraphView:
+        """The lane graph SUMO built (open networks), or the closed ring's edges in order."""
+        table = getattr(self, "_lanes", None)
+        spec = self.spec
+        order = [e.id for e in spec.edges]
+        by_id = {e.id: e for e in spec.edges}
+        if table is not None:
+            facts = table.edge_facts
+            return LaneGraphView(
+                lambda e: by_id[e].lanes if e in by_id else facts.get(e, (1, 0.0, 0.0))[0],
+                table.next_lanes, table.prev_lanes,
+                lambda e: float(facts.get(e, (0, 0.0, 0.0))[1]), len(facts),
+            )  # fmt: skip
+
+        def step(edge: str, lane: int, by: int) -> list[tuple[str, int]]:
+            if not spec.closed or edge not in by_id:
+                return []
+            other = by_id[order[(order.index(edge) + by) % len(order)]]
+            return [(other.id, lane)] if lane < other.lanes else []
+
+        return LaneGraphView(
+            lambda e: by_id[e].lanes if e in by_id else 1,
+            lambda e, lane: step(e, lane, 1), lambda e, lane: step(e, lane, -1),
+            lambda e: float(by_id[e].length) if e in by_id else 0.0, len(order),
+        )  # fmt: skip
 
     def _ids_or_blank(self, row: int) -> str:
         return self.table.ids[row] if row >= 0 else ""
 
-    def _get(self, array: np.ndarray, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
+    def _get(self, array: np.ndarray, veh_id: str | Sequence[str], error: Any = ERROR) -> Any:
         table = self.table
+        if self._pending_removal:  # removed this step: unknown, as in Flow
+            gone = self._removed()
+            if isinstance(veh_id, str):
+                known = veh_id in table and veh_id not in gone
+                return float(array[table.row(veh_id)]) if known else error
+            return [
+                float(array[table.row(v)]) if v in table and v not in gone else error
+                for v in veh_id
+            ]
         if isinstance(veh_id, str):
             return float(array[table.row(veh_id)]) if veh_id in table else error
         return [float(array[table.row(v)]) if v in table else error for v in veh_id]

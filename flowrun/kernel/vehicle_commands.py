@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from flowrun.kernel.vehicle_api import without_removed
+
 if TYPE_CHECKING:
     from flowrun.kernel.lanes import LaneTable
     from flowrun.kernel.population import Population
@@ -253,6 +255,9 @@ class VehicleCommands:
         v = self.api.vehicle
         ids = self.table.ids
         cmd = self.accel_cmd
+        if self._pending_removal:  # cars removed this step get no command (Flow)
+            back = self.api.simulation.getPendingVehicles()
+            cmd = without_removed(cmd, self.table, self._pending_removal, back)
         slow_down = self._fast.slow_down
         # Flow's rule (v + a*dt), never below 0 nor above the lane's speed limit (with
         # speedMode 0 SUMO would let a commanded car exceed the limit).
@@ -267,6 +272,8 @@ class VehicleCommands:
             for i, speed in zip(todo.tolist(), target.tolist(), strict=True):
                 slow_down(ids[i], speed, SLOW_DOWN_DURATION)
         for i, d in self._lane_change.items():
+            if not math.isfinite(cmd[i]) and ids[i] in self._pending_removal:
+                continue
             lanes = self._num_lanes(self.edges[i])
             target_lane = min(max(int(self.lanes[i]) + d, 0), lanes - 1)
             if target_lane != self.lanes[i]:

@@ -4,6 +4,7 @@ on any network as rows along its edges laid end to end."""
 from __future__ import annotations
 
 import itertools
+import logging
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -14,6 +15,20 @@ from flowrun.config.params import InitialConfig, VehicleParams
 from flowrun.errors import ConfigError, CountMismatchError
 from flowrun.networks.base import NetworkSpec, StartPositions
 from flowrun.suggest import did_you_mean
+
+log = logging.getLogger(__name__)
+
+
+def lanes_spread(lanes_distribution: float) -> float:
+    """``lanes_distribution`` with values below 1 counted as 1, as Flow does (with a warning).
+
+    Args:
+        lanes_distribution: ``InitialConfig.lanes_distribution`` (``inf`` = all lanes).
+    """
+    if lanes_distribution < 1:
+        log.warning('"lanes_distribution" is too small (%s); setting to 1', lanes_distribution)
+        return 1.0
+    return float(lanes_distribution)
 
 
 def place_on_closed_road(
@@ -52,7 +67,7 @@ def place_on_closed_road(
     n = len(vehicle_space)
     if n == 0:
         return [], []
-    k = int(max(1, min(lanes, initial.lanes_distribution)))
+    k = int(min(lanes, lanes_spread(initial.lanes_distribution)))
     per_lane = math.ceil(n / k)
     available = length - initial.bunching
     slot = np.arange(n) // k
@@ -223,7 +238,7 @@ def place_on_edges(
     unit = max(vehicle_space) + max(0.0, initial.min_gap)
     bunching = max(0.0, initial.bunching)
     usable = [e for e in edges if e.length >= unit]
-    spread = max(1.0, initial.lanes_distribution)
+    spread = lanes_spread(initial.lanes_distribution)
     lanes = np.array([int(min(e.lanes, spread)) for e in usable], dtype=np.int64)
     uniform = initial.spacing == "uniform"
     lead = np.array([0.0 if uniform and e.joined else unit for e in usable], dtype=np.float64)
