@@ -38,6 +38,7 @@ from flowrun.controllers.lane_change import (
     SimLaneChangeController,
     StaticLaneChanger,
 )
+from flowrun.controllers.minicity_router import MinicityRouter
 from flowrun.controllers.registry import (
     build_controller,
     controller_kind,
@@ -76,6 +77,7 @@ __all__ = [
     "LACController",
     "LaneChangeController",
     "LinearOVM",
+    "MinicityRouter",
     "OVMController",
     "PISaturation",
     "RLController",

@@ -29,6 +29,7 @@ from flowrun.controllers.lane_change import (
     SimLaneChangeController,
     StaticLaneChanger,
 )
+from flowrun.controllers.minicity_router import MinicityRouter
 from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.controllers.rl import RLController, SimCarFollowingController
 from flowrun.controllers.routing import ContinuousRouter, GridRouter, Router
@@ -65,6 +66,7 @@ _BUILTIN: tuple[type, ...] = (
     RLController,
     ContinuousRouter,
     GridRouter,
+    MinicityRouter,
     SimLaneChangeController,
     StaticLaneChanger,
 )

@@ -73,6 +73,7 @@ class FlowVehicleGetters:
     controllers: Any = None
     _edges_cache: list[str] | None
     _pending_removal: list[str]
+    _route_end: np.ndarray
     _stale_edges: bool
 
     @property
@@ -352,6 +353,12 @@ class FlowVehicleGetters:
         if veh_id not in self.table:
             return ()
         return tuple(self.api.vehicle.getRoute(veh_id))
+
+    @property
+    def route_end(self) -> np.ndarray:
+        """Every car's route's last edge, as an index into ``edge_names`` (-1 if unknown);
+        kept by the kernel on open networks (as ``edge_index``), no SUMO call."""
+        return self._route_end
 
     # ------------------------------------------------------------------ departures, arrivals
     def get_departed_ids(self) -> list[str]:

@@ -7,6 +7,7 @@ from flowrun.networks.highway import HighwayNetwork
 from flowrun.networks.highway_ramps import HighwayRampsNetwork
 from flowrun.networks.i210_subnetwork import I210SubNetwork
 from flowrun.networks.merge import MergeNetwork
+from flowrun.networks.minicity import MiniCityNetwork
 from flowrun.networks.ring import ADDITIONAL_NET_PARAMS, RingNetwork
 from flowrun.networks.template import TemplateNetwork
 
@@ -18,6 +19,7 @@ __all__ = [
     "HighwayRampsNetwork",
     "I210SubNetwork",
     "MergeNetwork",
+    "MiniCityNetwork",
     "Network",
     "NetworkSpec",
     "RingNetwork",

@@ -13,6 +13,7 @@ from flowrun.networks.highway import HighwayNetwork
 from flowrun.networks.highway_ramps import HighwayRampsNetwork
 from flowrun.networks.i210_subnetwork import I210SubNetwork
 from flowrun.networks.merge import MergeNetwork
+from flowrun.networks.minicity import MiniCityNetwork
 from flowrun.networks.ring import RingNetwork, check_ring_fits
 from flowrun.networks.template import TemplateNetwork
 from flowrun.networks.traffic_light_grid import TrafficLightGridNetwork
@@ -28,6 +29,7 @@ NETWORKS: dict[str, type[Network]] = {
     "bottleneck": BottleneckNetwork,
     "highway_ramps": HighwayRampsNetwork,
     "i210_subnetwork": I210SubNetwork,
+    "minicity": MiniCityNetwork,
 }
 _ALIASES = {
     "loop": "ring",
@@ -52,6 +54,8 @@ _ALIASES = {
     "HighwayRampsNetwork": "highway_ramps",
     "HighwayRampsScenario": "highway_ramps",
     "I210SubNetwork": "i210_subnetwork",
+    "MiniCityNetwork": "minicity",
+    "MiniCityScenario": "minicity",
 }
 
 
