@@ -8,7 +8,7 @@ from typing import Annotated
 
 import typer
 
-from flowrun.cli.common import guarded
+from flowrun.cli.common import SeedOpt, SetOpt, guarded, overrides_with_seed
 from flowrun.config import dump_config
 from flowrun.config.preflight import validate_config
 from flowrun.errors import ConfigError
@@ -47,14 +47,8 @@ def register(app: typer.Typer) -> None:
                 "flow_params)."
             ),
         ],
-        overrides: Annotated[
-            list[str] | None,
-            typer.Option(
-                "--set",
-                help="Override a key, e.g. --set sim.step=0.5 --set vehicles[0].count=10 "
-                "(value read as YAML).",
-            ),
-        ] = None,
+        set_: SetOpt = None,
+        seed: SeedOpt = None,
     ) -> None:
         """Check CONFIG as baseline and train would, then print the resolved config as YAML.
 
@@ -63,9 +57,10 @@ def register(app: typer.Typer) -> None:
         line and key path, and exit code 1; nothing is written. Settings that would have no
         effect are warned about. An import path (env.class: my_envs:MyEnv, a controller
         type: pkg.mod:Class) is imported to check it, so its module's top-level code runs,
-        as it would in baseline/train.
+        as it would in baseline/train. --set and --seed as in baseline/train, e.g.
+        --set sim.step=0.5 --set vehicles[0].count=10.
         """
-        cfg = validate_config(config, overrides or ())
+        cfg = validate_config(config, overrides_with_seed(set_, seed))
         typer.echo(dump_config(cfg), nl=False)
 
     @app.command("list")

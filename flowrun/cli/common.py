@@ -111,8 +111,17 @@ def load_located(config: Path, overrides: list[str]) -> tuple[ExperimentConfig, 
 
 
 def overrides_with_seed(sets: list[str] | None, seed: int | None) -> list[str]:
-    """``--set`` values plus ``--seed`` as the override ``sim.seed=S`` (last, so it wins)."""
+    """``--set`` values plus ``--seed`` as the override ``sim.seed=S`` (last, so it wins).
+
+    Raises:
+        ConfigError: ``seed`` is negative or too large for the simulator and SB3.
+    """
+    from flowrun.config.checks import MAX_SEED
+    from flowrun.errors import ConfigError
+
     items = list(sets or [])
+    if seed is not None and not 0 <= seed <= MAX_SEED:
+        raise ConfigError(f"--seed must be between 0 and {MAX_SEED}, got {seed}")
     if seed is not None:
         items.append(f"sim.seed={seed}")
     return items

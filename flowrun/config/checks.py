@@ -271,10 +271,19 @@ M, SPEED = " m", " m/s"
 #: seeds of parallel envs and evaluation episodes count up from it.
 MAX_SEED = 2**31 - 1
 
+
+def _seed(value: Any) -> str | None:
+    if value is None or isinstance(value, bool) or not isinstance(value, int):
+        return at_least(0)(value)
+    if not 0 <= value <= MAX_SEED:
+        return f"must be between 0 and {MAX_SEED}, got {value}"
+    return None
+
+
 FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (ExperimentConfig, "name"): _name,
     (SumoParams, "sim_step"): _sim_step,
-    (SumoParams, "seed"): at_least(0, high=MAX_SEED),
+    (SumoParams, "seed"): _seed,
     (SumoParams, "port"): between(0, 65535),
     (SumoParams, "num_clients"): at_least(1),
     (SumoParams, "sight_radius"): at_least(0, high=MAX_METRES, unit=M),
@@ -291,8 +300,7 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (InitialConfig, "perturbation"): at_least(0, high=MAX_METRES, unit=M),
     (InitialConfig, "x0"): magnitude(MAX_METRES, M),
     (InitialConfig, "bunching"): magnitude(MAX_METRES, M),
-    # below 1 counts as 1 (with a warning when placing), as in Flow
-    (InitialConfig, "lanes_distribution"): lambda value: _finite(value, True),
+    (InitialConfig, "lanes_distribution"): at_least(1, "use .inf for all lanes", allow_inf=True),
     (VehicleType, "veh_id"): _vehicle_id,
     (VehicleType, "num_vehicles"): at_least(0, high=MAX_VEHICLES),
     (VehicleType, "initial_speed"): at_least(0, high=MAX_SPEED, unit=SPEED),
@@ -322,7 +330,7 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (TrainConfig, "algorithm"): one_of("algorithm", ALGORITHMS),
     (TrainConfig, "total_timesteps"): at_least(1, high=1e13),
     (TrainConfig, "n_envs"): at_least(1, high=1024),
-    (TrainConfig, "seed"): at_least(0, high=MAX_SEED),
+    (TrainConfig, "seed"): _seed,
     (TrainConfig, "eval_freq"): at_least(0),
     (TrainConfig, "eval_episodes"): at_least(1, high=1e6),
     (TrainConfig, "checkpoint_freq"): at_least(0),
