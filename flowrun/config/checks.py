@@ -300,7 +300,8 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (InitialConfig, "perturbation"): at_least(0, high=MAX_METRES, unit=M),
     (InitialConfig, "x0"): magnitude(MAX_METRES, M),
     (InitialConfig, "bunching"): magnitude(MAX_METRES, M),
-    (InitialConfig, "lanes_distribution"): at_least(1, "use .inf for all lanes", allow_inf=True),
+    # below 1 counts as 1 (with a warning when placing), as in Flow
+    (InitialConfig, "lanes_distribution"): lambda value: _finite(value, True),
     (VehicleType, "veh_id"): _vehicle_id,
     (VehicleType, "num_vehicles"): at_least(0, high=MAX_VEHICLES),
     (VehicleType, "initial_speed"): at_least(0, high=MAX_SPEED, unit=SPEED),
