@@ -28,6 +28,19 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
 V_OBS_SCALE = 15.0  # m/s: speeds in the partial observation are divided by this
 
 
+def v_eq_max_function(v: Any, *args: float) -> Any:
+    """Flow's residual for the ring's equilibrium speed with one AV (solve it for ``v``).
+
+    ``args`` = (number of vehicles, ring length m). The largest equilibrium gap with one AV,
+    ``(length - 5 n) / (n - 1)``, minus IDM's equilibrium gap at speed ``v`` (v0 = 30 m/s,
+    s0 = 2 m, T = 1 s, delta = 4): ``(s0 + v T) / sqrt(1 - (v / v0)^delta)``. ``v`` may be
+    a number or an array (``scipy.optimize.fsolve`` passes one).
+    """
+    num_vehicles, length = args
+    s_eq_max = (length - num_vehicles * 5.0) / (num_vehicles - 1)
+    return s_eq_max - (2.0 + v * 1.0) * (1.0 - (v / 30.0) ** 4) ** -0.5
+
+
 def partial_observation(v_av: Any, v_lead: Any, gap: Any, max_length: float) -> np.ndarray:
     """The AV's view in :class:`WaveAttenuationPOEnv`: ``[v_av/15, (v_lead - v_av)/15,
     gap/max_length]`` (speeds in m/s, gap to the leader's front bumper and length in m).
