@@ -181,6 +181,20 @@ def test_help_shares_the_common_option_texts() -> None:
         assert params["benchmark"][flag]
 
 
+def test_first_seed_is_sim_seed_of_the_config_after_set() -> None:
+    from flowrun.cli.commands_benchmark import _first_seed
+
+    assert _first_seed(BENCHMARKS["merge0"], BENCH_CONFIGS, ()) == 0
+    assert _first_seed(BENCHMARKS["merge0"], BENCH_CONFIGS, ("sim.seed=7",)) == 7
+
+
+def test_cli_missing_config_folder_names_the_file(tmp_path: Path) -> None:
+    result = CliRunner().invoke(
+        app, ["benchmark", "grid1", "--configs", str(tmp_path), "--out", str(tmp_path / "o")])
+    assert result.exit_code == 1
+    assert f"benchmark grid1: no config {tmp_path.resolve() / 'grid1.yaml'}" in result.output
+
+
 def test_metric_values_come_from_the_familys_key() -> None:
     row = {"mean_speed": 4.5, "episode_return": -120.0, "outflow": 1100.0}
     assert metric_value(BENCHMARKS["merge0"].metric, row) == 4.5

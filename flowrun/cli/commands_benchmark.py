@@ -67,6 +67,20 @@ def _check_configs(plan: BenchmarkPlan) -> None:
             raise ConfigError(f"benchmark {bench.name}: {err}") from None
 
 
+def _first_seed(bench: Benchmark, configs: Path | None, sets: tuple[str, ...]) -> int:
+    """The first seed without --seed: ``sim.seed`` of the config (a --set of it counts)."""
+    from flowrun.config.loader import load_config
+    from flowrun.experiment.benchmark import default_config_dir
+
+    path = bench.config_path(configs if configs is not None else default_config_dir())
+    if not path.is_file():
+        return 0  # _check_configs says which file is missing
+    try:
+        return int(load_config(path, list(sets)).sim.seed or 0)
+    except ConfigError as err:
+        raise ConfigError(f"benchmark {bench.name}: {err}") from None
+
+
 @guarded
 def benchmark(
     names: NamesArg = None,
@@ -120,13 +134,14 @@ def benchmark(
         raise ConfigError(f"--seeds must be >= 1, got {seeds}")
     if jobs is not None and jobs < 1:
         raise ConfigError(f"--jobs must be >= 1, got {jobs}")
-    first = 0 if seed is None else seed
+    sets = tuple(set_ or [])
+    first = seed if seed is not None else _first_seed(chosen[0], configs, sets)
     plan = BenchmarkPlan(
         folder=out / "benchmark" / folder_name(),
         benchmarks=tuple(chosen),
         seeds=tuple(range(first, first + seeds)),
         configs=(configs if configs is not None else bm.default_config_dir()).resolve(),
-        sets=tuple(set_ or []),
+        sets=sets,
         train=train,
         record=record,
     )

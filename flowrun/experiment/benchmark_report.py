@@ -14,11 +14,12 @@ from flowrun.experiment.rundir import write_json
 
 
 def mean_std(part: dict[str, Any] | None) -> str:
-    """``mean ± std (n)`` of a baseline/policy entry; ``-`` when it has no value."""
+    """``mean ± std (n=...)`` of a baseline/policy entry (the std to 2 significant digits, ``n``
+    shown unless 1); ``-`` when it has no value."""
     if not part or part.get("mean") is None:
         return "-"
     n = len(part["values"])
-    return f"{_num(part['mean'])} ± {_num(part['std'])}" + (f" (n={n})" if n != 1 else "")
+    return f"{_num(part['mean'])} ± {part['std']:.2g}" + (f" (n={n})" if n != 1 else "")
 
 
 def reference_text(row: dict[str, Any]) -> str:
