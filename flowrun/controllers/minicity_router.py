@@ -11,8 +11,10 @@ edges of 2 and 5 m) is followed by a further random hop in the same route, so th
 cannot cross a whole short last edge within one step and leave the network at its end
 before the router sees it there. ``min_edge_length=0`` gives Flow's exact one-hop routes.
 
-Routers of this kind (a ``route_vehicles`` method) are driven by :class:`GroupRouters`
-once per simulation step, before the step's commands are sent.
+Routers of this kind (a ``route_vehicles`` method) are driven by :class:`GroupRouters`:
+the kernel runs them at every update, right after reading where the cars are and before
+looking for leaders along the routes (as it does for ``ContinuousRouter``), so a car never
+sits on its route's last edge in an observed state.
 """
 
 from __future__ import annotations
@@ -139,19 +141,19 @@ class MinicityRouter(Router):
         self._forced[[i for e, i in lanes.edge_pos.items() if e in self.FORCED]] = True
 
     def route_vehicles(
-        self, k: Any, rows: np.ndarray, rng: np.random.Generator
-    ) -> tuple[list[str], list[list[str]]]:
-        """New routes for the group's cars (``rows`` of ``k.vehicle``) that need one.
+        self, vk: Any, lanes: Any, rows: np.ndarray, rng: np.random.Generator
+    ) -> tuple[list[int], list[list[str]]]:
+        """New routes for the group's cars that need one.
 
         Args:
-            k: the kernel (``k.vehicle`` state of this step, ``k.network.lanes``).
+            vk: the vehicle kernel, its state of this step read (edges, lanes, route ends).
+            lanes: the network's lanes (:class:`~flowrun.kernel.lanes.LaneTable`).
             rows: the group's rows in the vehicle arrays.
             rng: the generator of the random choices.
 
         Returns:
-            The ids of the cars to reroute and their new routes.
+            The rows of the cars to reroute and their new routes.
         """
-        vk, lanes = k.vehicle, k.network.lanes
         if lanes is None or not rows.size:
             return [], []
         self._bind(lanes)
@@ -162,13 +164,13 @@ class MinicityRouter(Router):
         if not todo.size:
             return [], []
         lane_index = vk.lanes[rows[todo]].tolist()
-        due: list[tuple[str, str, tuple[str, ...]]] = []
+        due: list[tuple[int, str, tuple[str, ...]]] = []
         for j, lane in zip(todo.tolist(), lane_index, strict=True):
-            vid, edge = ids[int(rows[j])], names[int(edge_index[j])]
+            row, edge = int(rows[j]), names[int(edge_index[j])]
             forced = self.FORCED.get(edge, ())
-            if forced and tuple(vk.get_route(vid)[1 : 1 + len(forced)]) == forced:
+            if forced and tuple(vk.get_route(ids[row])[1 : 1 + len(forced)]) == forced:
                 continue  # already on Flow's fixed route
-            due.append((vid, f"{edge}_{lane}", forced))
+            due.append((row, f"{edge}_{lane}", forced))
         if not due:
             return [], []
         starts, prefixes = [], []
@@ -177,17 +179,17 @@ class MinicityRouter(Router):
             starts.append(reached if reached is not None else lane)
             prefixes.append([lane_edge(lane), *forced] if reached is not None else [])
         tails = random_routes(starts, self._successors, self._lengths, rng, self.min_edge_length)
-        out_ids, out_routes = [], []
-        for (vid, _, forced), prefix, tail in zip(due, prefixes, tails, strict=True):
+        out_rows, out_routes = [], []
+        for (row, _, forced), prefix, tail in zip(due, prefixes, tails, strict=True):
             if forced and prefix:  # Flow's fixed route, continued at random past a short end
                 last_len = self._lengths.get(prefix[-1], 0.0)
                 route = prefix + (tail[1:] if last_len < self.min_edge_length else [])
             else:
                 route = tail
             if len(route) > 1:
-                out_ids.append(vid)
+                out_rows.append(row)
                 out_routes.append(route)
-        return out_ids, out_routes
+        return out_rows, out_routes
 
 
 class GroupRouters:
@@ -218,10 +220,10 @@ class GroupRouters:
     def __bool__(self) -> bool:
         return bool(self.routers)
 
-    def step(self, k: Any) -> None:
-        """Give this step's new routes (applied with the step's other commands)."""
-        vk = k.vehicle
+    def step(self, vk: Any, lanes: Any) -> None:
+        """Reroute the cars that need it, at once (the kernel calls this at each update,
+        before it looks for leaders along the routes)."""
         for gi, router in self.routers:
-            ids, routes = router.route_vehicles(k, vk.table.rows_of_group(gi), vk.rng)
-            if ids:
-                vk.choose_routes(ids, routes)
+            rows, routes = router.route_vehicles(vk, lanes, vk.table.rows_of_group(gi), vk.rng)
+            if rows:
+                vk.reroute_now(rows, routes)

@@ -135,7 +135,7 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         self.controls: list[GroupControl] = build_controllers(network.vehicles)
         bind_per_vehicle_groups(self.controls, network.vehicles)  # Flow-style get_accel(env)
         self._flow_style = FlowStyleDriver(network.vehicles)
-        self._group_routers = GroupRouters.of(network.vehicles)  # e.g. MinicityRouter
+        self.k.group_routers = GroupRouters.of(network.vehicles)  # e.g. MinicityRouter
         self.step_counter = 0
         self.time_counter = 0
         self.record_frames = False
@@ -315,8 +315,6 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
             vk.apply_acceleration_idx(control.sl, accel)
         if self._flow_style:  # Flow-style lane-change and routing controllers, Flow's order
             self._flow_style.step(self)
-        if self._group_routers:  # routers that route a whole group at once
-            self._group_routers.step(self.k)
         if action is not None:  # already clipped by ``step``
             self._apply_rl_actions(action)
         self.additional_command()

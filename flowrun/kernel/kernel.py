@@ -44,6 +44,8 @@ class Kernel:
         self.simulation = SimulationKernel(sim_params.sim_step)
         self.traffic_light = TrafficLightKernel()
         self.net_file: Path | None = None
+        #: routers of whole vehicle groups (``GroupRouters``), run at every vehicle update
+        self.group_routers: Any = None
 
     @property
     def scenario(self) -> NetworkKernel:
@@ -93,6 +95,7 @@ class Kernel:
         kernel_class = VehicleKernel if ring else OpenVehicleKernel
         self.vehicle = kernel_class(table, spec, self.sim_params.sim_step, rng)
         self.vehicle.read_xy = read_xy
+        self.vehicle.group_routers = self.group_routers
         self.vehicle.attach(api, lanes)
         self.simulation.attach(api)
         self.traffic_light.attach(api)

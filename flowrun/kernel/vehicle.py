@@ -8,6 +8,7 @@ just before the simulation step.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Sequence
 from itertools import chain
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -84,6 +85,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self.spec = spec
         self.dt = dt
         self.rng = rng if rng is not None else np.random.default_rng(0)
+        #: routers of whole groups, run at each update (set by the kernel's owner)
+        self.group_routers: Any = None
         self.api: Any = None
         self.read_xy = True
         self.ring_path = ring_fast_path(spec, initial)
@@ -289,7 +292,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         # A step nobody asks about (the first of two sims per env step with SUMO-driven
         # humans) reads nothing more; the look-ahead of ContinuousRouter needs the lanes now.
         self._pending = True
-        if self.LAZY_FOLLOWING and not pop.continuous.any():
+        routers = self.group_routers
+        if self.LAZY_FOLLOWING and not pop.continuous.any() and not routers:
             d = self.__dict__
             for name in _PLACE_AND_FOLLOWING if self.read_xy else _PLACE_AND_FOLLOWING - _XY:
                 d.pop(name, None)
@@ -301,6 +305,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
                 self._read_xy()
             if pop.continuous.any():  # before the look-ahead, which follows the new route
                 self._route_continuously(self._lanes.edge_index[self._lane_key])  # type: ignore[union-attr]
+            if routers:  # routers of whole groups (e.g. MinicityRouter), also before it
+                routers.step(self, self._lanes)
             if self.LAZY_FOLLOWING:
                 for name in _FOLLOWING:
                     self.__dict__.pop(name, None)
@@ -495,6 +501,15 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
                 route = choices[int(self.rng.choice(len(choices), p=probs / probs.sum()))][0]
             self.api.vehicle.setRoute(self.table.ids[r], list(route))
             self._route_of[self.table.ids[r]] = tuple(route)
+            self._route_end[r] = self._lanes.edge_pos.get(route[-1], -1)
+
+    def reroute_now(self, rows: Sequence[int], routes: Sequence[Sequence[str]]) -> None:
+        """Give the cars of ``rows`` new routes at once (a router during the update)."""
+        assert self._lanes is not None
+        for r, route in zip(rows, routes, strict=True):
+            vid = self.table.ids[r]
+            self.api.vehicle.setRoute(vid, list(route))
+            self._route_of[vid] = tuple(route)
             self._route_end[r] = self._lanes.edge_pos.get(route[-1], -1)
 
     def resync(self) -> None:
