@@ -144,6 +144,12 @@ def place_on_network(
     """
     by_id = {e.id: e for e in spec.edges}
     distribution = initial.edges_distribution
+    if distribution == "all" and initial.spacing == "uniform":
+        from flowrun.networks.flow_line import flow_loop_line, place_on_flow_line
+
+        line = flow_loop_line(spec)
+        if line is not None:
+            return place_on_flow_line(spec, line, vehicle_space, initial, rng)
     if isinstance(distribution, dict):
         total = sum(int(v) for v in distribution.values())
         if total != len(vehicle_space):
