@@ -63,7 +63,18 @@ OUT_HELP = "Folder that receives"
 
 def out_option(receives: str) -> Any:
     """The ``--out`` option, its help saying what the folder receives (``receives``)."""
-    return typer.Option("--out", help=f"{OUT_HELP} {receives}; nothing in it is overwritten.")
+    return typer.Option(
+        "--out",
+        help=f"{OUT_HELP} {receives}; nothing in it is overwritten.",
+        callback=expand_home,
+    )
+
+
+def expand_home(path: Path | None) -> Path | None:
+    """``~`` at the start of a path is the home folder, also when the shell left it alone
+    (quoted, or in ``--out=~/runs``): SUMO's tools expand it themselves, so a literal ``~``
+    folder would break their paths."""
+    return path.expanduser() if path is not None else None
 
 
 OutOpt = Annotated[Path, out_option("the run folders: OUT/<config name>/...")]
@@ -91,7 +102,7 @@ def guarded(fn: Callable[P, R]) -> Callable[P, R]:
         try:
             return fn(*args, **kwargs)
         except FlowrunError as err:
-            typer.secho(f"error: {err}", err=True, fg=typer.colors.RED)
+            typer.secho(f"error: {one_line(str(err))}", err=True, fg=typer.colors.RED)
             raise typer.Exit(code=1) from None
 
     return wrapper
@@ -108,6 +119,12 @@ def load_located(config: Path, overrides: list[str]) -> tuple[ExperimentConfig, 
     if is_flow_module(config):
         return load_any_config(config, overrides), Locations(str(config))
     return load_config_located(config, overrides)
+
+
+def one_line(message: str) -> str:
+    """``message`` on one line: a tool's multi-line output quoted in an error (netconvert's
+    ``Error: ...`` lines) joined with spaces."""
+    return " ".join(part.strip() for part in message.splitlines() if part.strip())
 
 
 def overrides_with_seed(sets: list[str] | None, seed: int | None) -> list[str]:

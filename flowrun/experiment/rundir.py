@@ -62,6 +62,7 @@ __all__ = [
     "Interrupted",
     "RunStatus",
     "check_out_dir",
+    "check_sumo_path",
     "create_run_dir",
     "describe_os_error",
     "exit_code_of",
@@ -135,8 +136,10 @@ def check_out_dir(out: Path) -> None:
     """Refuse an ``--out`` that is a file or a read-only folder, before anything starts.
 
     Raises:
-        FlowrunError: naming ``out`` and what is wrong with it.
+        FlowrunError: naming ``out`` and what is wrong with it (also a ``,`` in it:
+            :func:`check_sumo_path`).
     """
+    check_sumo_path(out, "--out")
     probe = out
     while not probe.exists():
         if probe.parent == probe:
@@ -146,6 +149,20 @@ def check_out_dir(out: Path) -> None:
         raise FlowrunError(f"--out {out}: {probe} is a file, not a folder; pass a folder")
     if probe.is_dir() and not os.access(probe, os.W_OK | os.X_OK):
         raise FlowrunError(f"--out {out}: cannot write in {probe} (read-only or not yours)")
+
+
+def check_sumo_path(path: Path, what: str) -> None:
+    """Refuse a folder SUMO cannot take files from: its file options (``--route-files``,
+    netconvert's inputs) split at ``,``, so ``runs,old/`` would be read as two paths.
+
+    Raises:
+        FlowrunError: ``path`` holds a ``,``.
+    """
+    if "," in str(path):
+        raise FlowrunError(
+            f"{what} {path}: SUMO reads ',' in a file path as a list separator; "
+            "choose a folder without ','"
+        )
 
 
 def run_dir_name(seed: int) -> str:
@@ -182,9 +199,11 @@ def create_run_dir(
 
     Raises:
         ConfigError: ``cfg.name`` is not a plain folder name.
-        FlowrunError: the folder cannot be created or written.
+        FlowrunError: the folder cannot be created or written, or its path holds a ``,``
+            (:func:`check_sumo_path`).
     """
     base = folder if folder is not None else out / _safe_name(cfg.name) / run_dir_name(seed)
+    check_sumo_path(base, "run folder")
     run_dir = unique_dir(base)
     try:
         (run_dir / "config.yaml").write_text(dump_config(cfg))

@@ -28,6 +28,7 @@ from flowrun.errors import ConfigError, TrainingError
 from flowrun.experiment.baseline import open_run_log
 from flowrun.experiment.metrics import RunMetrics
 from flowrun.experiment.rundir import (
+    check_sumo_path,
     exit_code_of,
     mark_done,
     mark_running,
@@ -269,6 +270,7 @@ def _load_normalize(path: Path) -> Any:
 
 
 def _eval_dir(parent: Path, seed: int) -> Path:
+    check_sumo_path(parent, "--out")
     return unique_dir(parent / f"{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}-{seed}")
 
 
