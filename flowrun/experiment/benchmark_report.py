@@ -82,6 +82,11 @@ def write_results(
         "mean ± std over the seeds. Flow's reference: the score benchmarks/create_movies.sh "
         "expects of a trained policy (it passes at 95 %).",
         *(["", *notes(rows)] if notes(rows) else []),
+        "",
+        "Each baseline is its benchmark's config with these --set overrides (after the run's):",
+        "",
+        *(f"- {row['benchmark']}: " + " ".join(f"`--set {s}`" for s in row["baseline"]["sets"])
+          for row in rows),
     ]
     md_path = plan.folder / "results.md"
     md_path.write_text("\n".join(lines) + "\n")
