@@ -176,6 +176,10 @@ class Network(FlowAttributes):
         self.traffic_lights = traffic_lights or TrafficLightParams()
         self.params = self.resolve_params(net_params.additional_params)
         self.spec = self.build_spec()
+        if lights := self.traffic_lights.get_properties():  # Flow: the node becomes a light
+            from flowrun.networks.flow_hooks import lights_on_nodes
+
+            self.spec = lights_on_nodes(self.spec, lights)
 
     @classmethod
     def resolve_params(cls, given: dict[str, Any]) -> dict[str, Any]:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
@@ -170,3 +170,19 @@ def _connections(given: Any, edges: set[str], owner: str) -> tuple[Connection, .
                        int(c.get("toLane", 0)))
         )
     return tuple(out)
+
+
+def lights_on_nodes(spec: NetworkSpec, light_ids: Iterable[str]) -> NetworkSpec:
+    """``spec`` with every node a traffic light was added on made a ``traffic_light``
+    junction, as Flow's network generation does (``TrafficLightParams.add("top")`` on a ring
+    puts a light at its ``top`` node). Ids that name no node are left for the light check to
+    report; a template's own file is used as is.
+    """
+    wanted = set(light_ids)
+    if spec.net_file is not None or not wanted & {n.id for n in spec.nodes}:
+        return spec
+    nodes = tuple(
+        replace(n, type="traffic_light") if n.id in wanted and n.type != "traffic_light" else n
+        for n in spec.nodes
+    )
+    return replace(spec, nodes=nodes)

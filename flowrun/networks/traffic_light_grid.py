@@ -177,6 +177,8 @@ class TrafficLightGridNetwork(Network):
 
     ADDITIONAL_NET_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_NET_PARAMS
     network_type: ClassVar[str] = "traffic_light_grid"
+    #: a ring's parameters, which Flow's own grid test set-ups pass and Flow ignores
+    UNUSED_FLOW_PARAMS: ClassVar[frozenset[str]] = frozenset({"length", "lanes", "resolution"})
 
     @classmethod
     def resolve_params(cls, given: dict[str, Any]) -> dict[str, Any]:
