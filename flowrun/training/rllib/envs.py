@@ -2,8 +2,9 @@
 
 Single-agent envs are flowrun's Gymnasium envs as they are. A multi-agent env (a PettingZoo
 ``ParallelEnv`` of :mod:`flowrun.multiagent`) is wrapped in :class:`RLlibMultiAgentEnv`, which
-ends RLlib's episode on the env's ``episode_over`` (RLlib's own PettingZoo wrapper ends it when
-no agent is left, which on an open network also happens mid-episode).
+ends RLlib's episode on the env's ``episode_over`` and nowhere else (RLlib's own PettingZoo
+wrapper, and RLlib's episode itself, end it when no agent is left, which on an open network
+also happens mid-episode).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
+from gymnasium.spaces import Box
 from ray.rllib.env.multi_agent_env import MultiAgentEnv
 
 from flowrun.config.dump import config_to_dict
@@ -20,6 +22,7 @@ from flowrun.config.loader import config_from_dict
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.vehicles import is_rl
 from flowrun.envs.factory import make_env
+from flowrun.training.rllib.options import EPISODE_AGENT
 
 #: The name flowrun's env creator is registered under with Ray Tune's registry.
 ENV_NAME = "flowrun_env"
@@ -62,42 +65,71 @@ def register() -> None:
 class RLlibMultiAgentEnv(MultiAgentEnv):
     """A flowrun PettingZoo ``ParallelEnv`` as an RLlib ``MultiAgentEnv``.
 
-    The agent ids, spaces and per-agent dictionaries are the PettingZoo env's. RLlib's episode
-    ends when the env's ``episode_over`` turns true: ``terminateds["__all__"]`` after a
-    collision (or an episode that ended before its horizon), ``truncateds["__all__"]`` at the
-    horizon. Steps without agents (an open network with no AV in it) go on with ``{}``.
+    The agent ids, spaces and per-agent dictionaries are the PettingZoo env's: an inflow AV
+    joins with its first observation, and leaves with ``terminated`` (its last observation
+    zeros and its reward 0, as Flow). RLlib's episode ends when the env's ``episode_over``
+    turns true: ``terminateds["__all__"]`` after a collision (or an episode that ended before
+    its horizon), ``truncateds["__all__"]`` at the horizon. Steps without agents (an open
+    network with no AV in it) go on with ``{}``.
+
+    RLlib 2.60 also ends a multi-agent episode as soon as every agent it has seen is done --
+    at the first step of a merge episode whose AVs enter later, or whenever the last AV on the
+    road leaves -- and goes on with the same env in a new episode, so its episode returns
+    and lengths would be cut in pieces. One more agent, :data:`EPISODE_AGENT` (no vehicle),
+    keeps RLlib's episode as long as the env's: it observes at reset, acts once (its action
+    is ignored), and observes again only at the episode's end, with reward 0. Its module is
+    never trained; it adds one agent step per episode.
     """
+
+    #: The episode agent's observation and action (one value each, always 0 / ignored).
+    EPISODE_OBS_SPACE = Box(0.0, 1.0, (1,), np.float32)
+    EPISODE_ACT_SPACE = Box(-1.0, 1.0, (1,), np.float32)
 
     def __init__(self, env: Any) -> None:
         super().__init__()
         self.env = env
-        self.possible_agents = list(env.possible_agents)
+        self.possible_agents = [*env.possible_agents, EPISODE_AGENT]
         self.agents: list[Any] = []
-        self.observation_spaces = {a: env.observation_space(a) for a in self.possible_agents}
-        self.action_spaces = {a: env.action_space(a) for a in self.possible_agents}
+        self.observation_spaces = {a: env.observation_space(a) for a in env.possible_agents}
+        self.action_spaces = {a: env.action_space(a) for a in env.possible_agents}
+        self.observation_spaces[EPISODE_AGENT] = self.EPISODE_OBS_SPACE
+        self.action_spaces[EPISODE_AGENT] = self.EPISODE_ACT_SPACE
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[Any, Any], dict[Any, Any]]:
-        """Reset the wrapped env."""
+        """Reset the wrapped env; the episode agent observes."""
         obs, infos = self.env.reset(seed=seed, options=options)
-        self.agents = list(self.env.agents)
-        return obs, infos
+        self.agents = [*self.env.agents, EPISODE_AGENT]
+        return {**obs, EPISODE_AGENT: self._episode_obs()}, {**infos, EPISODE_AGENT: {}}
 
     def step(self, action_dict: dict[Any, Any]) -> tuple[Any, Any, Any, Any, Any]:
-        """Step the wrapped env; add RLlib's ``__all__`` flags from ``episode_over``."""
-        obs, rewards, terminateds, truncateds, infos = self.env.step(action_dict)
-        self.agents = list(self.env.agents)
+        """Step the wrapped env; add RLlib's ``__all__`` flags from ``episode_over`` (and the
+        episode agent's last observation at the end)."""
+        actions = {a: v for a, v in action_dict.items() if a != EPISODE_AGENT}
+        obs, rewards, terminateds, truncateds, infos = self.env.step(actions)
         over = bool(self.env.episode_over)
         crash = any(bool(i.get("crash")) for i in infos.values())
         horizon = self.env.step_counter >= self.env.env_params.horizon
-        terminateds = {**terminateds, "__all__": over and (crash or not horizon)}
-        truncateds = {**truncateds, "__all__": over and not terminateds["__all__"]}
+        ended = over and (crash or not horizon)
+        terminateds = {**terminateds, "__all__": ended}
+        truncateds = {**truncateds, "__all__": over and not ended}
+        self.agents = [*self.env.agents, EPISODE_AGENT]
+        if over:
+            self.agents = []
+            obs[EPISODE_AGENT] = self._episode_obs()
+            rewards[EPISODE_AGENT] = 0.0
+            terminateds[EPISODE_AGENT] = ended
+            truncateds[EPISODE_AGENT] = not ended
+            infos[EPISODE_AGENT] = {}
         return obs, rewards, terminateds, truncateds, infos
 
     def close(self) -> None:
         """Close the wrapped env (its SUMO)."""
         self.env.close()
+
+    def _episode_obs(self) -> np.ndarray:
+        return np.zeros(1, dtype=np.float32)
 
 
 def _module_id(name: str) -> str:

@@ -56,6 +56,9 @@ EXCLUDED = frozenset({
 })  # fmt: skip
 #: How the agents of a multi-agent env map to policies (``train.policies``).
 POLICY_MODES = ("shared", "group", "agent")
+#: The agent (and its module, never trained) that keeps RLlib's multi-agent episode as long as
+#: the env's: see :class:`flowrun.training.rllib.envs.RLlibMultiAgentEnv`.
+EPISODE_AGENT = "__episode__"
 
 
 @cache
@@ -244,9 +247,11 @@ def build_ppo_config(
     if policies is not None:
         from functools import partial
 
+        trained = set(policies.values())
         config.multi_agent(
-            policies=set(policies.values()),
-            policy_mapping_fn=partial(map_agent, dict(policies)),
+            policies=trained | {EPISODE_AGENT},
+            policy_mapping_fn=partial(map_agent, {**policies, EPISODE_AGENT: EPISODE_AGENT}),
+            policies_to_train=sorted(trained),
         )
     try:
         config.validate()

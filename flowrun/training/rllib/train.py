@@ -2,7 +2,8 @@
 
 Run folder (``runs/<name>/<timestamp>-<seed>/``): ``config.yaml``, ``command.txt``,
 ``versions.json`` (with Ray's version), ``tensorboard/`` (RLlib's main metrics per iteration),
-``progress.jsonl`` (one line per iteration), ``policies.json`` (multi-agent: agent -> policy),
+``progress.jsonl`` (one line per iteration: env and agent steps, mean episode return and
+length), ``policies.json`` (multi-agent: agent -> policy),
 ``checkpoints/iter_<n>/`` (RLlib checkpoints) with ``checkpoints/state.json`` (the latest),
 ``best_checkpoint/`` (best evaluation return, when evaluating during training),
 ``final_checkpoint/``, ``metrics.json``; the final evaluation goes under ``eval/``
@@ -36,6 +37,7 @@ from flowrun.training.resume import note_resume
 from flowrun.training.rllib.cluster import RaySession, ray_session
 from flowrun.training.rllib.deps import require_ray
 from flowrun.training.rllib.options import (
+    EPISODE_AGENT,
     build_ppo_config,
     check_train_config,
     env_runners,
@@ -262,12 +264,23 @@ def _log_iteration(
     line = {
         "iteration": iteration,
         "timesteps": done,
+        "agent_steps": agent_steps(result),
         "episode_return_mean": ret,
+        "episode_len_mean": _number(result, "env_runners", "episode_len_mean"),
         "eval_return_mean": score,
         "time_this_iter_s": round(float(result.get("time_this_iter_s", 0.0)), 3),
     }
     with (run_dir / "progress.jsonl").open("a") as f:
         f.write(json.dumps(line) + "\n")
+
+
+def agent_steps(result: dict[str, Any]) -> int:
+    """Agent steps sampled so far by the trained policies (RLlib's module steps; the env steps
+    for a single-agent run; the episode agent's one step per episode left out)."""
+    steps = result.get("env_runners", {}).get("num_module_steps_sampled_lifetime", {})
+    if not isinstance(steps, dict):
+        return 0
+    return int(sum(float(v) for k, v in steps.items() if k != EPISODE_AGENT))
 
 
 def _save(algo: Any, path: Path) -> None:
