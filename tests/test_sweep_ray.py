@@ -144,3 +144,18 @@ def test_a_bad_backend_is_one_line(tmp_path: Path, args: list[str], needle: str)
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0], lines
     assert not tmp_path.joinpath("sugiyama").exists()
+
+
+def test_ray_backend_without_ray_names_the_install_command(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setitem(sys.modules, "ray", None)  # as if Ray were not installed
+    args = ["sweep", str(SUGIYAMA), "--grid", "network.length=230", "--backend", "ray",
+            "--out", str(tmp_path)]  # fmt: skip
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 1
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, lines
+    assert "flowrun sweep --backend ray needs the 'rllib' extra" in lines[0]
+    assert "pip install" in lines[0] and "flowrun[rllib]" in lines[0]
+    assert not tmp_path.joinpath("sugiyama").exists()

@@ -181,7 +181,10 @@ def sweep(
     ],
     seeds: Annotated[int, typer.Option("--seeds", help="Seeds per grid point.")] = 1,
     jobs: Annotated[
-        int | None, typer.Option("--jobs", help="Points run at once (default: CPU count).")
+        int | None,
+        typer.Option(
+            "--jobs", help="Points run at once (default: CPU count; on Ray: the cluster's CPUs)."
+        ),
     ] = None,
     metric: Annotated[
         str, typer.Option("--metric", help="Metric plotted against the first --grid key.")
@@ -196,15 +199,15 @@ def sweep(
         typer.Option(
             "--backend",
             help="local: processes on this machine; ray: Ray tasks on a Ray cluster "
-            "[default: local, or ray with --ray-address].",
+            "(default: local; ray with --ray-address).",
         ),
     ] = None,
     ray_address: Annotated[
         str | None,
         typer.Option(
             "--ray-address",
-            help="Ray cluster to run the points on (implies --backend ray) "
-            "[default with --backend ray: $RAY_ADDRESS, else a local Ray].",
+            help="Ray cluster to run the points on; implies --backend ray (default with "
+            "--backend ray: $RAY_ADDRESS, else a local Ray for the sweep).",
         ),
     ] = None,
     seed: SeedOpt = None,
