@@ -42,6 +42,28 @@ EvalOutOpt = Annotated[
 ]
 
 
+def not_a_training_run(run_dir: Path) -> FlowrunError:
+    """The error for a run folder whose config has no ``train:`` section (a baseline run)."""
+    return FlowrunError(
+        f"{run_dir} is not a training run: its config.yaml has no train: section (a "
+        "baseline run folder?); pass a folder made by flowrun train"
+    )
+
+
+def _check_steps_left(run_dir: Path, total: int) -> None:
+    """Refuse to resume a complete run that has already trained ``total`` steps (it would
+    train nothing and replace its final model and evaluation)."""
+    from flowrun.training.runstate import read_metrics, run_state
+
+    done = (read_metrics(run_dir) or {}).get("timesteps")
+    if run_state(run_dir) == "complete" and isinstance(done, int) and done >= total:
+        raise FlowrunError(
+            f"{run_dir} already trained {done} of train.total_timesteps={total} steps; to "
+            f"continue, raise it (--set train.total_timesteps={2 * done}), or evaluate it "
+            f"with flowrun eval {run_dir}"
+        )
+
+
 @contextmanager
 def stop_on_signals() -> Iterator[StopRequest]:
     """Turn SIGINT and SIGTERM into a :class:`StopRequest` (restored on exit).
@@ -92,6 +114,7 @@ def train(
     best model. Ctrl-C or SIGTERM saves a checkpoint and exits with 130 / 143.
     """
     from flowrun.config.flow_module import is_flow_module
+    from flowrun.config.loader import load_config
     from flowrun.config.model import TrainConfig
     from flowrun.config.preflight import preflight
     from flowrun.training.deps import require
@@ -102,7 +125,11 @@ def train(
     if seed is not None:
         overrides.append(f"train.seed={seed}")
     if resume is not None:
+        saved = resume / "config.yaml"
+        if saved.is_file() and load_config(saved).train is None:
+            raise not_a_training_run(resume)
         cfg = resume_config(resume, overrides)
+        _check_steps_left(resume, cfg.train.total_timesteps if cfg.train else 0)
         console.print(f"resuming {resume} with its config.yaml (CONFIG is not re-read)")
     else:
         cfg, where = load_located(config, overrides)
@@ -211,7 +238,10 @@ def _evaluate_and_show(
 
     evaluate_run = evaluate_rllib if is_rllib_run(run_dir) else evaluate
 
-    horizon = eval_config(run_dir, overrides, config).env.horizon
+    run_cfg = eval_config(run_dir, overrides, config)
+    if run_cfg.train is None:
+        raise not_a_training_run(run_dir)
+    horizon = run_cfg.env.horizon
     state = run_state(run_dir)
     if state != "complete":
         what = {"running": "is still training", "cut": "was cut off (killed while training)",

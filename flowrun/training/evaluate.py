@@ -18,11 +18,12 @@ from typing import Any
 import numpy as np
 
 from flowrun.config.dump import config_to_dict, dump_config
-from flowrun.config.loader import config_from_dict, load_config
+from flowrun.config.experiment_checks import sub_path
+from flowrun.config.loader import config_from_dict, load_config, read_config_text
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.overrides import apply_overrides
 from flowrun.config.params import VehicleParams, is_rl
-from flowrun.config.yamlio import Locations, parse_yaml
+from flowrun.config.yamlio import parse_yaml
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.experiment.baseline import open_run_log
@@ -116,16 +117,19 @@ def eval_config(
     if config_override is None:
         return load_config(saved, overrides)
     data = config_to_dict(load_config(saved))
-    try:
-        text = config_override.read_text(encoding="utf-8")
-    except OSError as err:
-        raise ConfigError(f"cannot read {config_override}: {err.strerror}") from None
-    extra, _ = parse_yaml(text, str(config_override))
+    source = str(config_override)
+    extra, where = parse_yaml(read_config_text(config_override, source), source)
     if not isinstance(extra, dict):
-        raise ConfigError("expected a mapping of sections to override", "", str(config_override))
+        raise ConfigError("expected a mapping of sections to override", "", source)
     _merge(data, extra)
-    apply_overrides(data, list(overrides), Locations("--set"))
-    return config_from_dict(data, str(config_override))
+    apply_overrides(data, list(overrides), where)
+    try:
+        return config_from_dict(data, source)
+    except ConfigError as err:  # at the override file's line when the key is in it
+        key = sub_path(err.path)
+        if any(key[:n] in where.where for n in range(1, len(key) + 1)):
+            raise where.error(err.message, key) from None
+        raise
 
 
 def _merge(base: dict[str, Any], extra: dict[str, Any]) -> None:

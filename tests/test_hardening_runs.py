@@ -1,0 +1,95 @@
+"""``eval`` and ``train --resume`` given run folders they cannot use: a baseline run, a
+finished training run with nothing left to train, an override file with a mistake in it.
+One clear line each, exit 1, and the folder left as it was."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from flowrun.cli.main import app
+from flowrun.experiment.rundir import mark_done, mark_running
+
+pytest.importorskip("stable_baselines3")
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def run_folder(tmp_path: Path, config: str, metrics: dict[str, object] | None = None) -> Path:
+    """A finished run folder holding ``configs/<config>`` (and ``metrics``), no model."""
+    folder = tmp_path / "runs" / "x" / "20260101-000000-0"
+    folder.mkdir(parents=True)
+    shutil.copy(ROOT / "configs" / config, folder / "config.yaml")
+    if metrics is not None:
+        (folder / "metrics.json").write_text(json.dumps(metrics))
+    mark_running(folder)
+    mark_done(folder, "complete", exit_code=0)
+    return folder
+
+
+def snapshot(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+def one_error(*args: object) -> str:
+    result = CliRunner().invoke(app, [str(a) for a in args])
+    assert result.exit_code == 1, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in result.output, result.output
+    return lines[0]
+
+
+@pytest.mark.parametrize("how", [["eval"], ["train", str(ROOT / "configs" / "ring_wave.yaml")]])
+def test_a_baseline_run_folder_is_not_taken_for_a_training_run(
+    tmp_path: Path, how: list[str]
+) -> None:
+    folder = run_folder(tmp_path, "sugiyama.yaml")
+    before = snapshot(folder)
+    args = [*how, folder] if how == ["eval"] else [*how, "--resume", folder]
+    error = one_error(*args)
+    assert error == (
+        f"error: {folder} is not a training run: its config.yaml has no train: section "
+        "(a baseline run folder?); pass a folder made by flowrun train"
+    )
+    assert snapshot(folder) == before
+
+
+def test_resuming_a_run_that_trained_all_its_steps_says_how_to_continue(tmp_path: Path) -> None:
+    folder = run_folder(tmp_path, "ring_wave.yaml", {"status": "complete", "timesteps": 150000})
+    before = snapshot(folder)
+    error = one_error("train", ROOT / "configs" / "ring_wave.yaml", "--resume", folder)
+    assert "already trained 150000 of train.total_timesteps=150000 steps" in error
+    assert "--set train.total_timesteps=300000" in error and f"flowrun eval {folder}" in error
+    assert snapshot(folder) == before
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("env:\n  horizonn: 5\n", ":2: env.horizonn: unknown key 'horizonn' (did you mean"),
+        ("sim:\n  step: 0.1\nenv:\n  horizon: -5\n", ":4: env.horizon: must be greater than 0"),
+        ("- 1\n- 2\n", ": expected a mapping of sections to override"),
+    ],
+)
+def test_eval_config_override_errors_name_its_line(
+    tmp_path: Path, text: str, expected: str
+) -> None:
+    folder = run_folder(tmp_path, "ring_wave.yaml")
+    override = tmp_path / "override.yaml"
+    override.write_text(text)
+    error = one_error("eval", folder, "--config", override)
+    assert error.startswith(f"error: {override}{expected}"), error
+    assert not (folder / "eval").exists()
+
+
+@pytest.mark.parametrize("kind", ["missing", "folder"])
+def test_eval_config_override_that_is_no_file(tmp_path: Path, kind: str) -> None:
+    folder = run_folder(tmp_path, "ring_wave.yaml")
+    override = tmp_path / "nope.yaml" if kind == "missing" else tmp_path
+    error = one_error("eval", folder, "--config", override)
+    expected = "config file not found" if kind == "missing" else "is a directory"
+    assert error.startswith(f"error: {override}: {expected}"), error
