@@ -131,7 +131,9 @@ def place_on_network(
     Where a route drives from one edge straight onto the next one in that order (same lane
     count), uniform rows run on across the junction; elsewhere a car's front keeps
     ``unit = max(vehicle_space) + min_gap`` from the edge's start, so no car hangs back onto
-    a road it is not driving on. See :func:`place_on_edges`.
+    a road it is not driving on. See :func:`place_on_edges`. ``uniform`` over ``all`` edges of
+    a loop whose junction links lie on Flow's line (the figure eight) is Flow's own rule
+    instead: :func:`flowrun.networks.flow_line.place_on_flow_line`.
 
     Args:
         spec: the network.
