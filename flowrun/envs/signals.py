@@ -53,15 +53,19 @@ class SwitchTimers:
     last_change: FloatArray = field(init=False)
     direction: FloatArray = field(init=False)
     currently_yellow: FloatArray = field(init=False)
+    #: ``last_change``, ``direction`` and ``currently_yellow`` in one array (the three
+    #: attributes are views into it): what :meth:`features` copies
+    packed: FloatArray = field(init=False)
 
     def __post_init__(self) -> None:
-        self.reset()
+        self.packed = np.zeros(3 * self.n)
+        self.last_change, self.direction, self.currently_yellow = (
+            self.packed[: self.n], self.packed[self.n : 2 * self.n], self.packed[2 * self.n :]
+        )
 
     def reset(self) -> None:
         """All lights vertical green, not yellow."""
-        self.last_change = np.zeros(self.n)
-        self.direction = np.zeros(self.n)
-        self.currently_yellow = np.zeros(self.n)
+        self.packed[:] = 0.0
 
     def step(self, switch: BoolArray) -> list[tuple[int, int, bool]]:
         """Advance one simulation step with the switch requests ``switch`` (per light).
@@ -96,7 +100,7 @@ class SwitchTimers:
 
     def features(self) -> FloatArray:
         """``last_change``, ``direction`` and ``currently_yellow`` of all lights, concatenated."""
-        return np.concatenate([self.last_change, self.direction, self.currently_yellow])
+        return self.packed.copy()
 
 
 def discrete_mask(action: int, n: int) -> BoolArray:

@@ -65,6 +65,7 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         self._edge_col = {e: i for i, e in enumerate(self.edge_list)}
         self._col_names: list[str] | None = None  # the lane table _col_by_index was built for
         self._col_by_index = np.zeros(0, dtype=np.int64)
+        self._slot_by_index = np.zeros(0, dtype=np.int64)
         self._edge_len = np.array([e.length for e in self.network.spec.edges])
         norm = max(self.num_edges - 1, 1)
         self._edge_num = {e: edge_number(e, self.rows, self.cols) / norm for e in self.edge_list}
@@ -72,7 +73,7 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         # the observed edges in observation order (light by light), and for each network edge
         # its place in that order (-1: not observed)
         observed_edges = [edge for _, edges in self.node_mapping for edge in edges]
-        self._slot_of_col = np.full(len(self.edge_list) + 1, -1, dtype=np.int64)
+        self._slot_of_col = np.full(len(self.edge_list) + 1, -1, dtype=np.int64)  # +1: none
         for slot, edge in enumerate(observed_edges):
             self._slot_of_col[self._edge_col[edge]] = slot
         by_id = {e.id: e for e in self.network.spec.edges}
@@ -88,48 +89,57 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
 
     def get_state(self) -> Any:
         """See the class docstring."""
-        vk, net = self.k.vehicle, self.k.network
-        max_speed = net.max_speed()
+        vk = self.k.vehicle
+        max_speed = self.k.network.max_speed()
         speeds = np.asarray(vk.speed, dtype=np.float64)
         pos = np.asarray(vk.lane_pos, dtype=np.float64)
-        n = speeds.size
-        col = self._edge_columns(vk, n)
+        n_edges = len(self.edge_list)
+        # each car's edge column (n_edges: an internal or unknown edge, a bin of its own)
+        # and observed-edge slot (-1: none)
+        col, slot = self._edge_columns(vk, speeds.size)
         # the num_observed cars nearest the junction on each observed edge, edge by edge
-        slot = self._slot_of_col[col]  # col -1 (internal edge) maps to the last entry: -1
-        rows = np.flatnonzero(slot >= 0)
-        rows = rows[np.lexsort((-pos[rows], slot[rows]))]
-        s = slot[rows]
+        # (one stable sort of all cars: by slot, then nearest first)
+        order = np.lexsort((-pos, slot))
+        s = slot[order]
         rank = np.arange(s.size) - np.searchsorted(s, s, side="left")
-        keep = rank < self.num_observed
-        rows, s = rows[keep], s[keep]
+        keep = (rank < self.num_observed) & (s >= 0)
+        rows, s = order[keep], s[keep]
         dest = s * self.num_observed + rank[keep]
-        size = self._slot_length.size * self.num_observed
-        obs_speed, obs_dist, obs_edge = np.zeros(size), np.zeros(size), np.zeros(size)
-        obs_speed[dest] = speeds[rows] / max_speed
-        obs_dist[dest] = (self._slot_length[s] - pos[rows]) / self.max_dist
-        obs_edge[dest] = self._slot_num[s]
+        # one buffer, filled part by part in the observation's order
+        per_car = self._slot_length.size * self.num_observed
+        obs = np.zeros(3 * per_car + 2 * n_edges + self.timers.packed.size)
+        obs[dest] = speeds[rows] / max_speed
+        obs[per_car + dest] = (self._slot_length[s] - pos[rows]) / self.max_dist
+        obs[2 * per_car + dest] = self._slot_num[s]
         ids = vk.table.ids
         self.observed_ids = [ids[r] for r in rows.tolist()]
-        on = col >= 0  # cars on junction-internal edges count for no edge
-        n_edges = len(self.edge_list)
-        counts = np.bincount(col[on], minlength=n_edges).astype(np.float64)
-        sums = np.bincount(col[on], weights=speeds[on], minlength=n_edges)
-        density = VEHICLE_LENGTH * counts / self._edge_len
-        velocity = np.divide(sums, counts, out=np.zeros(n_edges), where=counts > 0) / max_speed
-        obs = np.concatenate([obs_speed, obs_dist, obs_edge, density, velocity,
-                              self.timers.features()])  # fmt: skip
-        return np.clip(obs, 0.0, OBS_HIGH).astype(np.float32)
+        at = 3 * per_car
+        counts = np.bincount(col, minlength=n_edges + 1)[:n_edges]
+        sums = np.bincount(col, weights=speeds, minlength=n_edges + 1)[:n_edges]
+        obs[at : at + n_edges] = VEHICLE_LENGTH * counts / self._edge_len
+        velocity = obs[at + n_edges : at + 2 * n_edges]
+        np.divide(sums, counts, out=velocity, where=counts > 0)
+        velocity /= max_speed
+        obs[at + 2 * n_edges :] = self.timers.packed
+        # clipped to [0, OBS_HIGH] (np.clip's value, without its Python-level wrapper)
+        np.minimum(np.maximum(obs, 0.0, out=obs), OBS_HIGH, out=obs)
+        return obs.astype(np.float32)
 
-    def _edge_columns(self, vk: Any, n: int) -> np.ndarray:
-        """Each car's observed-edge column (-1: not an observed edge), by edge index."""
+    def _edge_columns(self, vk: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """Each car's network-edge column (the number of edges for a junction-internal or
+        unknown edge) and observed-edge slot (-1: none), by edge index."""
         index = vk.edge_index
         if index is None:
-            return np.fromiter((self._edge_col.get(e, -1) for e in vk.edges), np.int64, n)
+            other = len(self.edge_list)
+            col = np.fromiter((self._edge_col.get(e, other) for e in vk.edges), np.int64, n)
+            return col, self._slot_of_col[col]
         names = vk.edge_names
         if self._col_names is not names:  # a new lane table (a new episode)
             self._col_names = names
-            self._col_by_index = np.array([self._edge_col.get(e, -1) for e in names], np.int64)
-        return self._col_by_index[index]
+            other = len(self.edge_list)
+            self._col_by_index = np.array([self._edge_col.get(e, other) for e in names], np.int64)
+            self._slot_by_index = self._slot_of_col[self._col_by_index]
+        return self._col_by_index[index], self._slot_by_index[index]
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """``-delay - 0.2 * standing cars`` (``-delay`` when evaluating)."""

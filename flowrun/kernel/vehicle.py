@@ -38,9 +38,11 @@ _FOLLOWING = frozenset(
      "follower_headway")
 )  # fmt: skip
 #: where each car is: read when first asked in a step on an open network (``_read_place``)
-_PLACE = frozenset(("_lane_key", "_lane_pos", "lanes", "position", "speed_limit", "on_internal"))
+_PLACE = frozenset(("_lane_key", "_lane_pos"))
+#: what follows from where each car is: derived when first asked (``_derive_place``)
+_WHERE = frozenset(("lanes", "position", "speed_limit", "on_internal"))
 _XY = frozenset(("x", "y"))
-_PLACE_AND_FOLLOWING = _FOLLOWING | _PLACE | _XY
+_PLACE_AND_FOLLOWING = _FOLLOWING | _PLACE | _WHERE | _XY
 
 
 def ring_fast_path(spec: NetworkSpec, initial: VehicleTable) -> bool:
@@ -78,6 +80,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
     ) -> None:
         self._pending = False  # the following arrays of this step are still to be found
         self._place_pending = False  # lanes and positions of this step are still to be read
+        self._where_pending = False  # what follows from them is still to be derived
         self._xy_pending = False  # map coordinates of this step are still to be read
         self.initial = initial
         self.table = Population(initial.classes)
@@ -301,6 +304,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             self._xy_pending = self.read_xy
         else:
             self._read_place()
+            self._derive_place()
             if self.read_xy:
                 self._read_xy()
             if pop.continuous.any():  # before the look-ahead, which follows the new route
@@ -315,14 +319,21 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         return speed
 
     def _read_place(self) -> None:
-        """Every car's lane and position on it, and what follows from them (this step)."""
+        """Every car's lane and position on it (this step); what follows from them is
+        derived when first asked (:meth:`_derive_place`)."""
         self._place_pending = False
         fast, lanes, ids = self._fast, self._lanes, self.table.ids
         assert lanes is not None
-        keys = lanes.keys(list(map(fast.get_lane_id, ids)))
-        lane_pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, len(ids))
-        self._lane_key = keys
-        self._lane_pos = lane_pos
+        self._lane_key = lanes.keys(list(map(fast.get_lane_id, ids)))
+        self._lane_pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, len(ids))
+        self._where_pending = True
+
+    def _derive_place(self) -> None:
+        """Lane index, network position, speed limit and internal-edge flag of every car,
+        from its lane and position on it (this step's, read by :meth:`_read_place`)."""
+        self._where_pending = False
+        lanes, keys, lane_pos = self._lanes, self._lane_key, self._lane_pos
+        assert lanes is not None
         self.lanes = lanes.lane_index[keys]
         self.position = lanes.start[keys] + lane_pos
         self.speed_limit = lanes.speed_limit[keys]
@@ -568,6 +579,9 @@ class OpenVehicleKernel(VehicleKernel):
             d = self.__dict__
             if name in _PLACE and d.get("_place_pending"):
                 self._read_place()
+                return d[name]
+            if name in _WHERE and (d.get("_place_pending") or d.get("_where_pending")):
+                self._derive_place()  # reads the places first if they are pending
                 return d[name]
             if name in _XY and d.get("_xy_pending"):
                 self._read_xy()
