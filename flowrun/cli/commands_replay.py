@@ -6,8 +6,6 @@ import logging
 import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
-from datetime import UTC, datetime
-from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, TypeVar
 
@@ -22,43 +20,27 @@ from flowrun.cli.common import (
     out_option,
     sigterm_as_interrupt,
 )
+from flowrun.cli.replay_outputs import (
+    PlotKind,
+    draw_plots,
+    export_foxglove,
+    intersection_table,
+    replay_dir,
+)
 from flowrun.errors import RecordingError
-from flowrun.experiment.rundir import unique_dir
-from flowrun.recording import McapLog, McapRecorder, open_log, repair
-from flowrun.recording.atomic import new_file
+from flowrun.recording import open_log, repair
 from flowrun.replay import (
-    RouteLayout,
-    SpeedSeries,
     compare,
     layout_for,
-    outflow,
     parse_route,
-    plot_speeds,
-    plot_time_space,
-    plot_traffic,
-    plot_vehicle_speeds,
     speed_series,
     summarize,
     summary_rows,
-    time_space_points,
     to_csv,
-    traffic_series,
 )
-from flowrun.replay.plots import plot_stride
-from flowrun.replay.signal_plots import plot_signals
-from flowrun.replay.signals import intersection_rows, signal_series
+from flowrun.replay.signals import signal_series
 
 T = TypeVar("T")
-
-
-class PlotKind(StrEnum):
-    """What ``--plot`` draws."""
-
-    time_space = "time-space"
-    speed = "speed"
-    traffic = "traffic"
-    signals = "signals"
-    all = "all"
 
 
 @contextmanager
@@ -90,25 +72,10 @@ def _parse_vehicles(text: str | None) -> list[str] | None:
     return ids
 
 
-def _export_foxglove(
-    log: McapLog, out: Path, start: float | None, end: float | None, vehicles: list[str] | None
-) -> int:
-    """Copy the selected steps/vehicles into a new log (opens in Foxglove like any flowrun log)."""
-    stats = {s.step: s for s in log.stats(start, end)}
-    signals = {s.step: s for s in log.signals(start, end)}
-    written = 0
-    with (
-        new_file(out, "--foxglove") as tmp,
-        McapRecorder(tmp, metadata=log.metadata, attachments=log.attachments) as rec,
-    ):
-        for frame in log.frames(start, end, vehicles):
-            if frame.step in stats:
-                written += rec.write(frame, stats[frame.step], signals.get(frame.step))
-    return written
-
-
 def _check_new(path: Path | None, option: str) -> None:
     """Refuse an output that exists before any work is done (nothing is overwritten)."""
+    if path is not None and path.is_dir():
+        raise RecordingError(f"{option} {path} is a folder; give the new file's name in it")
     if path is not None and (path.exists() or path.is_symlink()):
         raise RecordingError(
             f"{option} {path} exists; choose a new path (flowrun never overwrites a file)"
@@ -153,73 +120,6 @@ def _interruptible(work: Callable[[], T], cleaned: str) -> T:
             return work()
     except KeyboardInterrupt as err:
         raise interrupted_exit(err, f"export stopped; {cleaned}") from None
-
-
-def _intersection_table(log: McapLog, start: float | None, end: float | None) -> Table:
-    """Mean queue and delay per traffic light (definitions: :mod:`flowrun.replay.signals`)."""
-    rows = intersection_rows(signal_series(log, start_s=start, end_s=end))
-    table = Table(
-        title=f"intersections - {log.path.name} (queue: cars < 0.1 m/s on the incoming edges; "
-        "delay: time lost vs the speed limit there, per car)"
-    )
-    for name in rows[0] if rows else ("light",):
-        table.add_column(name, justify="left" if name == "light" else "right")
-    for row in rows:
-        table.add_row(*row.values())
-    return table
-
-
-def replay_dir(out: Path | None, logs: list[Path]) -> Path:
-    """A new folder for one replay's plots: ``OUT/<log>-<timestamp>/`` (two logs:
-    ``<a>-vs-<b>-<timestamp>``), OUT defaulting to ``<first log's folder>/replay``; ``-1``,
-    ``-2``, ... when taken, so no earlier plot is ever overwritten.
-
-    Raises:
-        RecordingError: ``out`` is a file.
-        FlowrunError: the folder cannot be created (read-only, disk full).
-    """
-    parent = out if out is not None else logs[0].parent / "replay"
-    if parent.exists() and not parent.is_dir():
-        raise RecordingError(f"--out {parent} is a file; give a folder for the plots")
-    stem = "-vs-".join(p.stem for p in logs)
-    return unique_dir(parent / f"{stem}-{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}")
-
-
-def _plots(
-    plot: PlotKind,
-    opened: list[McapLog],
-    layouts: list[RouteLayout | None],
-    series: list[SpeedSeries],
-    start: float | None,
-    end: float | None,
-    chosen: list[str] | None,
-    folder: Path,
-) -> list[Path]:
-    """Draw what ``--plot`` asks into ``folder``; the PNGs written."""
-    written: list[Path] = []
-    suffixes = [""] if len(opened) == 1 else ["_A", "_B"]
-    if plot in (PlotKind.speed, PlotKind.all):
-        written.append(plot_speeds(opened, folder / "speeds.png", series=series))
-    for lg, layout, suffix in zip(opened, layouts, suffixes, strict=True):
-        if plot in (PlotKind.time_space, PlotKind.all):
-            data = time_space_points(
-                lg, start_s=start, end_s=end, vehicles=chosen, every=plot_stride(lg), route=layout
-            )
-            png = folder / f"time_space{suffix}.png"
-            written.append(plot_time_space(lg, png, data=data, route=layout))
-            if plot is PlotKind.all:
-                png = folder / f"vehicle_speeds{suffix}.png"
-                written.append(plot_vehicle_speeds(lg, png, data=data))
-    for lg, layout, suffix in zip(opened, layouts, suffixes, strict=True):
-        if plot in (PlotKind.traffic, PlotKind.all):
-            traffic = traffic_series(lg, layout, start_s=start, end_s=end)
-            flow = outflow(list(lg.stats(start, end)))
-            written.append(plot_traffic(lg, folder / f"traffic{suffix}.png", traffic, flow))
-    for lg, suffix in zip(opened, suffixes, strict=True):
-        if plot in (PlotKind.signals, PlotKind.all) and lg.has_signals:
-            lights = signal_series(lg, start_s=start, end_s=end)
-            written.append(plot_signals(lg, folder / f"signals{suffix}.png", lights))
-    return written
 
 
 REPLAY_HELP = f"""Summarise a run's MCAP log (or compare two); plot it, export CSV, repair it.
@@ -296,105 +196,127 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Summarise, compare, plot, export or repair MCAP logs (help: REPLAY_HELP)."""
         console = Console()
-        with _warnings_to_stderr():
-            if repair_:
-                _repair(logs)
-                return
-            if not 1 <= len(logs) <= 2:
-                raise RecordingError(f"replay takes one log or two to compare, got {len(logs)}")
-            _check_times(start, end)
-            if len(logs) == 2 and (csv is not None or foxglove is not None):
-                raise RecordingError("--csv and --foxglove work on one log; drop the second log")
-            _check_new(csv, "--csv")
-            _check_new(foxglove, "--foxglove")
-            if plot is not None and out is not None and out.exists() and not out.is_dir():
-                raise RecordingError(f"--out {out} is a file; give a folder for the plots")
-            if plot is None and out is not None:
-                raise RecordingError(
-                    "--out receives the plots of --plot; add --plot, or drop --out (--csv "
-                    "and --foxglove write exactly the file they name)"
-                )
-            chosen = _parse_vehicles(vehicles)
-            edges = parse_route(route) if route is not None else None
-            opened = [open_log(p) for p in logs]
-            layouts = [layout_for(lg, edges) for lg in opened]
-            series = [speed_series(lg, start_s=start, end_s=end, vehicles=chosen) for lg in opened]
-            if (start is not None or end is not None) and not any(s.times.size for s in series):
-                spans = [lg.time_range for lg in opened]
-                covers = " and ".join(f"{a:.1f}-{b:.1f} s" for a, b in filter(None, spans))
-                window = " and ".join(
-                    f"{name} {value:g} s"
-                    for name, value in (("--from", start), ("--to", end))
-                    if value is not None
-                )
-                raise RecordingError(
-                    f"no logged step within {window}; the log covers {covers or 'no time'}"
-                )
-            if chosen is not None:
-                seen = set().union(*(s.vehicle_types for s in series))
-                missing = [v for v in chosen if v not in seen]
-                if missing:
-                    typer.secho(
-                        f"warning: vehicle id(s) not in the log: {', '.join(missing)}",
-                        err=True,
-                        fg=typer.colors.YELLOW,
-                    )
-                if not seen:
+        try:
+            with _warnings_to_stderr(), sigterm_as_interrupt():
+                if repair_:
+                    _repair(logs)
+                    return
+                if not 1 <= len(logs) <= 2:
+                    raise RecordingError(f"replay takes one log or two to compare, got {len(logs)}")
+                _check_times(start, end)
+                if len(logs) == 2 and (csv is not None or foxglove is not None):
                     raise RecordingError(
-                        f"none of --vehicles {vehicles} appears in the selected steps"
+                        "--csv and --foxglove work on one log; drop the second log"
                     )
-            summaries = [
-                summarize(lg, start_s=start, end_s=end, vehicles=chosen, series=s)
-                for lg, s in zip(opened, series, strict=True)
-            ]
-            if len(opened) == 1:
-                table = Table(title=summaries[0].name, show_header=False)
-                table.add_column("", style="bold")
-                table.add_column("")
-                for label, value in summary_rows(summaries[0]).items():
-                    table.add_row(label, value)
-            else:
-                table = Table(title="flowrun replay: comparison")
-                table.add_column("", style="bold")
-                table.add_column(f"A: {logs[0].name}")
-                table.add_column(f"B: {logs[1].name}")
-                table.add_column("B - A", justify="right")
-                for label, (va, vb, delta) in compare(summaries[0], summaries[1]).items():
-                    table.add_row(label, va, vb, delta)
-            console.print(table)
-            for lg in opened:
-                if lg.has_signals:
-                    console.print(_intersection_table(lg, start, end))
+                _check_new(csv, "--csv")
+                _check_new(foxglove, "--foxglove")
+                if plot is not None and out is not None and out.exists() and not out.is_dir():
+                    raise RecordingError(f"--out {out} is a file; give a folder for the plots")
+                if plot is None and out is not None:
+                    raise RecordingError(
+                        "--out receives the plots of --plot; add --plot, or drop --out (--csv "
+                        "and --foxglove write exactly the file they name)"
+                    )
+                chosen = _parse_vehicles(vehicles)
+                edges = parse_route(route) if route is not None else None
+                opened = [open_log(p) for p in logs]
+                layouts = [layout_for(lg, edges) for lg in opened]
+                series = [
+                    speed_series(lg, start_s=start, end_s=end, vehicles=chosen) for lg in opened
+                ]
+                if (start is not None or end is not None) and not any(s.times.size for s in series):
+                    spans = [lg.time_range for lg in opened]
+                    covers = " and ".join(f"{a:.1f}-{b:.1f} s" for a, b in filter(None, spans))
+                    window = " and ".join(
+                        f"{name} {value:g} s"
+                        for name, value in (("--from", start), ("--to", end))
+                        if value is not None
+                    )
+                    raise RecordingError(
+                        f"no logged step within {window}; the log covers {covers or 'no time'}"
+                    )
+                if chosen is not None:
+                    seen = set().union(*(s.vehicle_types for s in series))
+                    missing = [v for v in chosen if v not in seen]
+                    if missing:
+                        typer.secho(
+                            f"warning: vehicle id(s) not in the log: {', '.join(missing)}",
+                            err=True,
+                            fg=typer.colors.YELLOW,
+                        )
+                    if not seen:
+                        raise RecordingError(
+                            f"none of --vehicles {vehicles} appears in the selected steps"
+                        )
+                summaries = [
+                    summarize(lg, start_s=start, end_s=end, vehicles=chosen, series=s)
+                    for lg, s in zip(opened, series, strict=True)
+                ]
+                if len(opened) == 1:
+                    table = Table(title=summaries[0].name, show_header=False)
+                    table.add_column("", style="bold")
+                    table.add_column("")
+                    for label, value in summary_rows(summaries[0]).items():
+                        table.add_row(label, value)
+                else:
+                    table = Table(title="flowrun replay: comparison")
+                    table.add_column("", style="bold")
+                    table.add_column(f"A: {logs[0].name}")
+                    table.add_column(f"B: {logs[1].name}")
+                    table.add_column("B - A", justify="right")
+                    for label, (va, vb, delta) in compare(summaries[0], summaries[1]).items():
+                        table.add_row(label, va, vb, delta)
+                console.print(table)
+                for lg in opened:
+                    if lg.has_signals:
+                        console.print(intersection_table(lg, start, end))
 
-            if csv is not None:
-                rows = _interruptible(
-                    lambda: to_csv(
-                        opened[0], csv, start_s=start, end_s=end, vehicles=chosen, overwrite=False
-                    ),
-                    f"nothing was written to {csv}",
-                )
-                typer.echo(f"wrote {csv} ({rows} rows)")
-                if opened[0].damage.data_lost:
-                    typer.secho(
-                        f"warning: {csv} lacks what the log lost: {opened[0].damage.short()}",
-                        err=True,
-                        fg=typer.colors.YELLOW,
+                if csv is not None:
+                    rows = _interruptible(
+                        lambda: to_csv(
+                            opened[0],
+                            csv,
+                            start_s=start,
+                            end_s=end,
+                            vehicles=chosen,
+                            overwrite=False,
+                        ),
+                        f"nothing was written to {csv}",
                     )
-            if foxglove is not None:
-                n = _interruptible(
-                    lambda: _export_foxglove(opened[0], foxglove, start, end, chosen),
-                    f"nothing was written to {foxglove}",
-                )
-                typer.echo(f"wrote {foxglove} ({n} logged steps)")
-            if plot is not None:
-                if plot is PlotKind.signals and not opened[0].has_signals:
-                    signal_series(opened[0])  # raises the readable "no traffic lights" error
-                folder = replay_dir(out, logs)
-                try:
-                    written = _plots(plot, opened, layouts, series, start, end, chosen, folder)
-                except BaseException:
-                    with suppress(OSError):
-                        folder.rmdir()  # only if nothing was written
-                    raise
-                for path in written:
-                    typer.echo(f"wrote {path}")
+                    typer.echo(f"wrote {csv} ({rows} rows)")
+                    if opened[0].damage.data_lost:
+                        typer.secho(
+                            f"warning: {csv} lacks what the log lost: {opened[0].damage.short()}",
+                            err=True,
+                            fg=typer.colors.YELLOW,
+                        )
+                if foxglove is not None:
+                    n = _interruptible(
+                        lambda: export_foxglove(opened[0], foxglove, start, end, chosen),
+                        f"nothing was written to {foxglove}",
+                    )
+                    typer.echo(f"wrote {foxglove} ({n} logged steps)")
+                if plot is not None:
+                    if plot is PlotKind.signals and not opened[0].has_signals:
+                        signal_series(opened[0])  # raises the readable "no traffic lights" error
+                    folder = replay_dir(out, logs)
+                    written: list[Path] = []
+                    try:
+                        with sigterm_as_interrupt():
+                            draw_plots(plot, opened, layouts, series, start, end, chosen, folder,
+                                       written)  # fmt: skip
+                    except BaseException as err:
+                        for path in written:
+                            typer.echo(f"wrote {path}")
+                        with suppress(OSError):
+                            folder.rmdir()  # only if nothing was written
+                        if isinstance(err, KeyboardInterrupt):
+                            kept = (
+                                f"{folder} holds the plots listed" if written else "no plot written"
+                            )
+                            raise interrupted_exit(err, f"plotting stopped; {kept}") from None
+                        raise
+                    for path in written:
+                        typer.echo(f"wrote {path}")
+        except KeyboardInterrupt as err:  # reading or drawing: nothing half written is left
+            raise interrupted_exit(err, "replay stopped") from None

@@ -26,13 +26,19 @@ _COLORS = ("tab:blue", "tab:orange")
 
 
 def _save(fig: Figure, out_png: str | os.PathLike[str]) -> Path:
+    """Write ``fig`` as a PNG, whole or not at all: drawn into a hidden partial file that is
+    renamed when complete, so a Ctrl-C or a full disk never leaves half an image."""
     out = Path(out_png)
+    tmp = out.with_name(f".{out.name}.{os.getpid()}.partial")
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
         FigureCanvasAgg(fig)
-        fig.savefig(out, dpi=120)
+        fig.savefig(tmp, dpi=120, format="png")
+        os.replace(tmp, out)
     except OSError as err:
         raise RecordingError(f"cannot write plot {out}: {err}") from err
+    finally:
+        tmp.unlink(missing_ok=True)
     return out
 
 

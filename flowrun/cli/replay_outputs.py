@@ -1,0 +1,122 @@
+"""What ``flowrun replay`` writes: plots into a new folder, a Foxglove copy, the
+intersection table. Split from :mod:`flowrun.cli.commands_replay` (the command itself)."""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime
+from enum import StrEnum
+from pathlib import Path
+
+from rich.table import Table
+
+from flowrun.errors import RecordingError
+from flowrun.experiment.rundir import unique_dir
+from flowrun.recording import McapLog, McapRecorder
+from flowrun.recording.atomic import new_file
+from flowrun.replay import (
+    RouteLayout,
+    SpeedSeries,
+    outflow,
+    plot_speeds,
+    plot_time_space,
+    plot_traffic,
+    plot_vehicle_speeds,
+    time_space_points,
+    traffic_series,
+)
+from flowrun.replay.plots import plot_stride
+from flowrun.replay.signal_plots import plot_signals
+from flowrun.replay.signals import intersection_rows, signal_series
+
+
+class PlotKind(StrEnum):
+    """What ``--plot`` draws."""
+
+    time_space = "time-space"
+    speed = "speed"
+    traffic = "traffic"
+    signals = "signals"
+    all = "all"
+
+
+def export_foxglove(
+    log: McapLog, out: Path, start: float | None, end: float | None, vehicles: list[str] | None
+) -> int:
+    """Copy the selected steps/vehicles into a new log (opens in Foxglove like any flowrun log)."""
+    stats = {s.step: s for s in log.stats(start, end)}
+    signals = {s.step: s for s in log.signals(start, end)}
+    written = 0
+    with (
+        new_file(out, "--foxglove") as tmp,
+        McapRecorder(tmp, metadata=log.metadata, attachments=log.attachments) as rec,
+    ):
+        for frame in log.frames(start, end, vehicles):
+            if frame.step in stats:
+                written += rec.write(frame, stats[frame.step], signals.get(frame.step))
+    return written
+
+
+def intersection_table(log: McapLog, start: float | None, end: float | None) -> Table:
+    """Mean queue and delay per traffic light (definitions: :mod:`flowrun.replay.signals`)."""
+    rows = intersection_rows(signal_series(log, start_s=start, end_s=end))
+    table = Table(
+        title=f"intersections - {log.path.name} (queue: cars < 0.1 m/s on the incoming edges; "
+        "delay: time lost vs the speed limit there, per car)"
+    )
+    for name in rows[0] if rows else ("light",):
+        table.add_column(name, justify="left" if name == "light" else "right")
+    for row in rows:
+        table.add_row(*row.values())
+    return table
+
+
+def replay_dir(out: Path | None, logs: list[Path]) -> Path:
+    """A new folder for one replay's plots: ``OUT/<log>-<timestamp>/`` (two logs:
+    ``<a>-vs-<b>-<timestamp>``), OUT defaulting to ``<first log's folder>/replay``; ``-1``,
+    ``-2``, ... when taken, so no earlier plot is ever overwritten.
+
+    Raises:
+        RecordingError: ``out`` is a file.
+        FlowrunError: the folder cannot be created (read-only, disk full).
+    """
+    parent = out if out is not None else logs[0].parent / "replay"
+    if parent.exists() and not parent.is_dir():
+        raise RecordingError(f"--out {parent} is a file; give a folder for the plots")
+    stem = "-vs-".join(p.stem for p in logs)
+    return unique_dir(parent / f"{stem}-{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}")
+
+
+def draw_plots(
+    plot: PlotKind,
+    opened: list[McapLog],
+    layouts: list[RouteLayout | None],
+    series: list[SpeedSeries],
+    start: float | None,
+    end: float | None,
+    chosen: list[str] | None,
+    folder: Path,
+    written: list[Path],
+) -> None:
+    """Draw what ``--plot`` asks into ``folder``, adding each PNG to ``written`` once whole."""
+    suffixes = [""] if len(opened) == 1 else ["_A", "_B"]
+    if plot in (PlotKind.speed, PlotKind.all):
+        written.append(plot_speeds(opened, folder / "speeds.png", series=series))
+    for lg, layout, suffix in zip(opened, layouts, suffixes, strict=True):
+        if plot in (PlotKind.time_space, PlotKind.all):
+            data = time_space_points(
+                lg, start_s=start, end_s=end, vehicles=chosen, every=plot_stride(lg), route=layout
+            )
+            png = folder / f"time_space{suffix}.png"
+            written.append(plot_time_space(lg, png, data=data, route=layout))
+            if plot is PlotKind.all:
+                png = folder / f"vehicle_speeds{suffix}.png"
+                written.append(plot_vehicle_speeds(lg, png, data=data))
+    for lg, layout, suffix in zip(opened, layouts, suffixes, strict=True):
+        if plot in (PlotKind.traffic, PlotKind.all):
+            traffic = traffic_series(lg, layout, start_s=start, end_s=end)
+            flow = outflow(list(lg.stats(start, end)))
+            written.append(plot_traffic(lg, folder / f"traffic{suffix}.png", traffic, flow))
+    for lg, suffix in zip(opened, suffixes, strict=True):
+        if plot in (PlotKind.signals, PlotKind.all) and lg.has_signals:
+            lights = signal_series(lg, start_s=start, end_s=end)
+            written.append(plot_signals(lg, folder / f"signals{suffix}.png", lights))
