@@ -93,3 +93,15 @@ def test_eval_config_override_that_is_no_file(tmp_path: Path, kind: str) -> None
     error = one_error("eval", folder, "--config", override)
     expected = "config file not found" if kind == "missing" else "is a directory"
     assert error.startswith(f"error: {override}: {expected}"), error
+
+
+def test_eval_of_a_folder_without_a_model_says_only_that(tmp_path: Path) -> None:
+    folder = run_folder(tmp_path, "ring_wave.yaml")
+    (folder / "status.json").unlink()  # no status: a run cut before it said anything
+    result = CliRunner().invoke(app, ["eval", str(folder)])
+    assert result.exit_code == 1
+    assert result.stderr == (
+        f"error: {folder} has no best_model.zip or final_model.zip; train first (or resume "
+        "an interrupted run)\n"
+    )
+    assert "note" not in result.stdout and not (folder / "eval").exists()

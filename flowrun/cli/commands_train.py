@@ -232,7 +232,7 @@ def _evaluate_and_show(
     model: str,
     out: Path | None,
 ) -> None:
-    from flowrun.training.evaluate import eval_config, evaluate
+    from flowrun.training.evaluate import eval_config, evaluate, model_path
     from flowrun.training.rllib import evaluate_rllib, is_rllib_run
     from flowrun.training.runstate import run_state
 
@@ -241,6 +241,8 @@ def _evaluate_and_show(
     run_cfg = eval_config(run_dir, overrides, config)
     if run_cfg.train is None:
         raise not_a_training_run(run_dir)
+    if evaluate_run is evaluate:
+        model_path(run_dir, model)  # no model: say so before any note about the run
     horizon = run_cfg.env.horizon
     state = run_state(run_dir)
     if state != "complete":
