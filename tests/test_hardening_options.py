@@ -146,3 +146,15 @@ def test_convert_set_of_an_unknown_key_names_it(tmp_path: Path) -> None:
     result = flowrun("convert", module, "--set", "env.horizonn=5")
     assert result.exit_code == 1
     assert "env.horizonn" in result.stderr and "horizon" in result.stderr
+
+
+def test_replay_default_out_blocked_by_a_file_says_so(tmp_path: Path) -> None:
+    log = record(tmp_path / "ring.mcap")
+    (tmp_path / "replay").write_text("not a folder")
+    result = flowrun("replay", log, "--plot", "speed")
+    assert result.exit_code == 1
+    assert result.stderr == (
+        f"error: {tmp_path / 'replay'} (the default --out) is a file; give a folder for the "
+        "plots (--out DIR)\n"
+    )
+    assert (tmp_path / "replay").read_text() == "not a folder"

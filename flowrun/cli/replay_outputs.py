@@ -9,7 +9,7 @@ from pathlib import Path
 
 from rich.table import Table
 
-from flowrun.errors import RecordingError
+from flowrun.errors import FlowrunError, RecordingError
 from flowrun.experiment.rundir import unique_dir
 from flowrun.recording import McapLog, McapRecorder
 from flowrun.recording.atomic import new_file
@@ -81,9 +81,15 @@ def replay_dir(out: Path | None, logs: list[Path]) -> Path:
     """
     parent = out if out is not None else logs[0].parent / "replay"
     if parent.exists() and not parent.is_dir():
-        raise RecordingError(f"--out {parent} is a file; give a folder for the plots")
+        what = f"--out {parent}" if out is not None else f"{parent} (the default --out)"
+        raise RecordingError(f"{what} is a file; give a folder for the plots (--out DIR)")
     stem = "-vs-".join(p.stem for p in logs)
-    return unique_dir(parent / f"{stem}-{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}")
+    try:
+        return unique_dir(parent / f"{stem}-{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}")
+    except FlowrunError as err:
+        if out is not None:
+            raise
+        raise RecordingError(f"{err}; give --out a folder you can write in") from None
 
 
 def draw_plots(
