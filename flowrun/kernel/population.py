@@ -95,6 +95,7 @@ class Population:
         ids, types, group, is_rl, commanded, continuous, lengths, min_gaps, max_speeds,
         accels, decels.
         version: incremented whenever vehicles enter or leave.
+        any_continuous: whether any live vehicle is routed by ``ContinuousRouter``.
     """
 
     def __init__(self, classes: Sequence[VehicleClass]) -> None:
@@ -104,15 +105,16 @@ class Population:
         self._by_name = {c.name: i for i, c in enumerate(classes)}
         self.foreign = len(classes)
         cls = self.classes
-        self._c_rl = np.array([c.is_rl for c in cls], dtype=bool)
-        self._c_cmd = np.array([c.commanded for c in cls], dtype=bool)
-        self._c_cont = np.array([c.continuous for c in cls], dtype=bool)
-        self._c_lc = np.array([c.lane_controlled for c in cls], dtype=bool)
-        self._c_len = np.array([c.length for c in cls], dtype=np.float64)
-        self._c_gap = np.array([c.min_gap for c in cls], dtype=np.float64)
-        self._c_vmax = np.array([c.max_speed for c in cls], dtype=np.float64)
-        self._c_acc = np.array([c.accel for c in cls], dtype=np.float64)
-        self._c_dec = np.array([c.decel for c in cls], dtype=np.float64)
+        # every class's facts as columns of two tables (flags, numbers): a change gathers
+        # each table once; the per-vehicle attributes are rows of the gathered tables
+        self._c_flags = np.array(
+            [[c.is_rl for c in cls], [c.commanded for c in cls], [c.continuous for c in cls],
+             [c.lane_controlled for c in cls]], dtype=bool,
+        )  # fmt: skip
+        self._c_numbers = np.array(
+            [[c.length for c in cls], [c.min_gap for c in cls], [c.max_speed for c in cls],
+             [c.accel for c in cls], [c.decel for c in cls]], dtype=np.float64,
+        )  # fmt: skip
         self._slot_of: dict[str, int] = {}
         self._slot_group = np.zeros(0, dtype=np.int64)
         self._row_of_slot = np.zeros(0, dtype=np.int64)
@@ -192,15 +194,11 @@ class Population:
         g = self._slot_group[self.slots]
         self.group = g
         self._types: tuple[int, list[str]] | None = None
-        self.is_rl = self._c_rl[g]
-        self.commanded = self._c_cmd[g]
-        self.continuous = self._c_cont[g]
-        self.lane_controlled = self._c_lc[g]
-        self.lengths = self._c_len[g]
-        self.min_gaps = self._c_gap[g]
-        self.max_speeds = self._c_vmax[g]
-        self.accels = self._c_acc[g]
-        self.decels = self._c_dec[g]
+        self.is_rl, self.commanded, self.continuous, self.lane_controlled = self._c_flags[:, g]
+        self.lengths, self.min_gaps, self.max_speeds, self.accels, self.decels = (
+            self._c_numbers[:, g]
+        )
+        self.any_continuous = bool(self.continuous.any())
 
     # ------------------------------------------------------------------ lookups
     @property

@@ -296,7 +296,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         # humans) reads nothing more; the look-ahead of ContinuousRouter needs the lanes now.
         self._pending = True
         routers = self.group_routers
-        if self.LAZY_FOLLOWING and not pop.continuous.any() and not routers:
+        if self.LAZY_FOLLOWING and not pop.any_continuous and not routers:
             d = self.__dict__
             for name in _PLACE_AND_FOLLOWING if self.read_xy else _PLACE_AND_FOLLOWING - _XY:
                 d.pop(name, None)
@@ -307,7 +307,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             self._derive_place()
             if self.read_xy:
                 self._read_xy()
-            if pop.continuous.any():  # before the look-ahead, which follows the new route
+            if pop.any_continuous:  # before the look-ahead, which follows the new route
                 self._route_continuously(self._lanes.edge_index[self._lane_key])  # type: ignore[union-attr]
             if routers:  # routers of whole groups (e.g. MinicityRouter), also before it
                 routers.step(self, self._lanes)
