@@ -21,8 +21,13 @@ from __future__ import annotations
 from bisect import bisect_left
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from flowrun.kernel.lanes import LaneTable
+    from flowrun.networks.base import NetworkSpec
 
 #: Flow's gap (m) to a lane's leader or follower when there is none.
 NO_NEIGHBOUR_GAP = 1000.0
@@ -47,6 +52,32 @@ class LaneGraphView:
     prev_lanes: LaneStep
     edge_length: Callable[[str], float]
     num_edges: int
+
+
+def lane_graph(spec: NetworkSpec, table: LaneTable | None) -> LaneGraphView:
+    """The lanes SUMO built (``table``, open networks), or a closed ring's edges in order
+    (lane ``i`` leads to lane ``i`` of the next edge)."""
+    order = [e.id for e in spec.edges]
+    by_id = {e.id: e for e in spec.edges}
+    if table is not None:
+        facts = table.edge_facts
+        return LaneGraphView(
+            lambda e: by_id[e].lanes if e in by_id else facts.get(e, (1, 0.0, 0.0))[0],
+            table.next_lanes, table.prev_lanes,
+            lambda e: float(facts.get(e, (0, 0.0, 0.0))[1]), len(facts),
+        )  # fmt: skip
+
+    def step(edge: str, lane: int, by: int) -> list[tuple[str, int]]:
+        if not spec.closed or edge not in by_id:
+            return []
+        other = by_id[order[(order.index(edge) + by) % len(order)]]
+        return [(other.id, lane)] if lane < other.lanes else []
+
+    return LaneGraphView(
+        lambda e: by_id[e].lanes if e in by_id else 1,
+        lambda e, lane: step(e, lane, 1), lambda e, lane: step(e, lane, -1),
+        lambda e: float(by_id[e].length) if e in by_id else 0.0, len(order),
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from flowrun.kernel.lane_neighbours import LaneGraphView, LaneNeighbours, lane_neighbours
+from flowrun.kernel.lane_neighbours import LaneNeighbours, lane_graph, lane_neighbours
 
 if TYPE_CHECKING:
     from flowrun.kernel.population import Population, VehicleTable
@@ -429,33 +429,7 @@ class FlowVehicleGetters:
         edges = self.edges
         return lane_neighbours(
             self.table.row(veh_id), edges, self.lanes, self.lane_pos, self.table.lengths,
-            self._lane_graph(),
-        )  # fmt: skip
-
-    def _lane_graph(self) -> LaneGraphView:
-        """The lane graph SUMO built (open networks), or the closed ring's edges in order."""
-        table = getattr(self, "_lanes", None)
-        spec = self.spec
-        order = [e.id for e in spec.edges]
-        by_id = {e.id: e for e in spec.edges}
-        if table is not None:
-            facts = table.edge_facts
-            return LaneGraphView(
-                lambda e: by_id[e].lanes if e in by_id else facts.get(e, (1, 0.0, 0.0))[0],
-                table.next_lanes, table.prev_lanes,
-                lambda e: float(facts.get(e, (0, 0.0, 0.0))[1]), len(facts),
-            )  # fmt: skip
-
-        def step(edge: str, lane: int, by: int) -> list[tuple[str, int]]:
-            if not spec.closed or edge not in by_id:
-                return []
-            other = by_id[order[(order.index(edge) + by) % len(order)]]
-            return [(other.id, lane)] if lane < other.lanes else []
-
-        return LaneGraphView(
-            lambda e: by_id[e].lanes if e in by_id else 1,
-            lambda e, lane: step(e, lane, 1), lambda e, lane: step(e, lane, -1),
-            lambda e: float(by_id[e].length) if e in by_id else 0.0, len(order),
+            lane_graph(self.spec, getattr(self, "_lanes", None)),
         )  # fmt: skip
 
     def _ids_or_blank(self, row: int) -> str:
