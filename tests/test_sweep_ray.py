@@ -81,14 +81,14 @@ def test_a_ray_sweep_gives_the_local_results_and_a_rerun_skips_finished_points(
 
 @pytest.mark.sumo
 def test_ctrl_c_reaches_the_points_on_ray_and_pending_points_never_start(
-    tmp_path: Path,
+    local_ray: None, tmp_path: Path
 ) -> None:
+    """The sweep attaches to the module's Ray by its address, as to a cluster's head."""
+    address = ray.get_runtime_context().gcs_address
     cmd = [FLOWRUN, "sweep", str(SUGIYAMA), "--grid", "vehicles[0].count=14,18,22",
-           "--steps", "1000000", "--jobs", "2", "--backend", "ray",
+           "--steps", "1000000", "--jobs", "2", "--ray-address", address,
            "--out", str(tmp_path)]  # fmt: skip
-    env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}  # its own local Ray
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=env)  # fmt: skip
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 120
         while len(list(tmp_path.glob("sugiyama/sweep-*/*/run_0.mcap"))) < 2:
@@ -159,3 +159,15 @@ def test_ray_backend_without_ray_names_the_install_command(
     assert "flowrun sweep --backend ray needs the 'rllib' extra" in lines[0]
     assert "pip install" in lines[0] and "flowrun[rllib]" in lines[0]
     assert not tmp_path.joinpath("sugiyama").exists()
+
+
+def test_a_node_without_the_working_directory_says_the_folders_must_be_shared(
+    tmp_path: Path,
+) -> None:
+    from flowrun.experiment.sweep_ray import run_point_task
+
+    missing = str(tmp_path / "not-on-this-node")
+    code, line = run_point_task(["-c", "pass"], missing, flag=None)
+    assert code == 1
+    assert line.startswith(f"error: the sweep's working directory {missing} does not exist")
+    assert "every node mounts at the same path" in line
