@@ -10,6 +10,7 @@ from flowrun.networks.merge import MergeNetwork
 from flowrun.networks.minicity import MiniCityNetwork
 from flowrun.networks.ring import ADDITIONAL_NET_PARAMS, RingNetwork
 from flowrun.networks.template import TemplateNetwork
+from flowrun.networks.traffic_light_grid import TrafficLightGridNetwork
 
 __all__ = [
     "ADDITIONAL_NET_PARAMS",
@@ -25,4 +26,5 @@ __all__ = [
     "RingNetwork",
     "StartPositions",
     "TemplateNetwork",
+    "TrafficLightGridNetwork",
 ]
