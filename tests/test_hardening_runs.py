@@ -105,3 +105,36 @@ def test_eval_of_a_folder_without_a_model_says_only_that(tmp_path: Path) -> None
         "an interrupted run)\n"
     )
     assert "note" not in result.stdout and not (folder / "eval").exists()
+
+
+@pytest.mark.sumo
+def test_eval_with_an_override_that_changes_the_observations_is_one_line(
+    tmp_path: Path,
+) -> None:
+    import gymnasium as gym
+    import numpy as np
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+
+    folder = run_folder(tmp_path, "ring_wave.yaml")
+    text = (folder / "config.yaml").read_text()
+    (folder / "config.yaml").write_text(text.replace("TRPO", "PPO").replace(
+        "normalize: true", "normalize: false"))  # fmt: skip
+
+    class Three(gym.Env[np.ndarray, np.ndarray]):  # the ring_wave policy's spaces
+        observation_space = gym.spaces.Box(-np.inf, np.inf, (3,))
+        action_space = gym.spaces.Box(-1.0, 1.0, (1,))
+
+    model = PPO("MlpPolicy", make_vec_env(Three), n_steps=8, batch_size=8, seed=0)
+    model.save(folder / "final_model.zip")
+    args = ["--set", "env.class=AccelEnv", "--set",
+            "env.additional_params={max_accel: 1, max_decel: 1, target_velocity: 10, "
+            "sort_vehicles: false}"]  # fmt: skip
+    error = one_error("eval", folder, *args)
+    assert error == (
+        "error: the policy in final_model.zip takes observations of shape (3,), but this "
+        "config's environment gives (44,); evaluate with the config it was trained on (drop "
+        "the --set/--config that changes the environment or its cars)"
+    )
+    (evaluation,) = (folder / "eval").iterdir()
+    assert json.loads((evaluation / "status.json").read_text())["status"] == "failed"

@@ -186,7 +186,15 @@ def evaluate(
     stats = BEST_VECNORMALIZE if path.name == BEST_MODEL else VECNORMALIZE
     normalize = _load_normalize(run_dir / stats) if tc.normalize else None
 
+    expected = policy.observation_space.shape
+
     def act(obs: Any) -> Any:
+        if expected is not None and np.shape(obs) != expected:
+            raise TrainingError(
+                f"the policy in {path.name} takes observations of shape {expected}, but this "
+                f"config's environment gives {np.shape(obs)}; evaluate with the config it was "
+                "trained on (drop the --set/--config that changes the environment or its cars)"
+            )
         x = normalize.normalize_obs(obs) if normalize is not None else obs
         action, _ = policy.predict(x, deterministic=deterministic)
         return action
