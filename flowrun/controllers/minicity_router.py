@@ -6,10 +6,16 @@ is on (so it never needs a lane change to follow it), and a car on ``e_37`` or `
 gets ``[edge, e_29_u, e_21]``. flowrun draws for all due cars of a group at once from the
 kernel's routing generator (seeded by the environment), never from ``random``.
 
-One addition: a hop onto an edge shorter than ``min_edge_length`` (the mini city has
-edges of 2 and 5 m) is followed by a further random hop in the same route, so that a car
-cannot cross a whole short last edge within one step and leave the network at its end
-before the router sees it there. ``min_edge_length=0`` gives Flow's exact one-hop routes.
+Two additions, each a parameter (both 0 give Flow's one-hop routes):
+
+- ``lookahead`` (m): the random hops are drawn ahead until the route reaches at least this
+  far beyond the car's edge, and drawn further before the car gets closer to the route's
+  end. SUMO's drivers and flowrun's leaders look only along a car's route, so with one-hop
+  routes a car drives blind into a queue just past its route's end (and rear-ends it).
+  Each next edge is still drawn uniformly among the links of the lane the car will be on.
+- ``min_edge_length`` (m): a route never ends on an edge shorter than this (the mini city
+  has edges of 2 and 5 m), so a car cannot cross its route's whole last edge within one
+  step and leave the network at its end before the router sees it there.
 
 Routers of this kind (a ``route_vehicles`` method) are driven by :class:`GroupRouters`:
 the kernel runs them at every update, right after reading where the cars are and before
@@ -53,25 +59,45 @@ def random_routes(
     edge_length: Mapping[str, float],
     rng: np.random.Generator,
     min_edge_length: float = 0.0,
-    max_hops: int = 8,
-) -> list[list[str]]:
-    """For cars on ``start_lanes``, a route from their edge through random lane links.
+    lookahead: float = 0.0,
+    base: Sequence[float] | None = None,
+    min_hops: Sequence[int] | None = None,
+    max_hops: int = 32,
+) -> tuple[list[list[str]], list[str]]:
+    """For cars on ``start_lanes``, random hops through lane links from their edge.
 
-    Each hop follows one of the current lane's links uniformly; hops continue while the edge
-    just reached is shorter than ``min_edge_length`` m (at most ``max_hops``). A car whose
-    lane has no link gets its edge alone.
+    Each hop follows one of the current lane's links uniformly. A car hops at least
+    ``min_hops`` times (default 1), then on while its hops cover less than
+    ``lookahead - base`` m or the edge just reached is shorter than ``min_edge_length`` m, at
+    most ``max_hops`` times; a lane without links ends the hops.
 
     Args:
-        start_lanes: the lane id of each car.
+        start_lanes: the lane id each car hops from.
         successors: see :func:`lane_successors`.
         edge_length: edge id -> length, m.
         rng: the generator the draws come from (one uniform per car still hopping, per hop).
-        min_edge_length: hop on from edges shorter than this, m.
-        max_hops: the most hops per route.
+        min_edge_length: never stop on an edge shorter than this, m.
+        lookahead: the distance the hops (plus ``base``) should cover, m.
+        base: per car, the distance already covered before the first hop, m (default 0).
+        min_hops: per car, the hops to make in any case (default 1).
+        max_hops: the most hops per car.
+
+    Returns:
+        Per car, its start edge followed by the edges hopped onto, and the lane it ends on.
     """
+    n = len(start_lanes)
     routes = [[lane_edge(lane)] for lane in start_lanes]
     lanes = list(start_lanes)
-    active = list(range(len(lanes)))
+    covered = [0.0] * n if base is None else [float(b) for b in base]
+    least = [1] * n if min_hops is None else list(min_hops)
+    hops = [0] * n
+
+    def go_on(i: int) -> bool:
+        if hops[i] < least[i]:
+            return True
+        return covered[i] < lookahead or edge_length.get(routes[i][-1], 0.0) < min_edge_length
+
+    active = [i for i in range(n) if go_on(i)]
     for _ in range(max_hops):
         active = [i for i in active if successors.get(lanes[i])]
         if not active:
@@ -80,9 +106,32 @@ def random_routes(
         picks = draw_indices(counts, rng).tolist()
         for i, k in zip(active, picks, strict=True):
             lanes[i] = successors[lanes[i]][k]
-            routes[i].append(lane_edge(lanes[i]))
-        active = [i for i in active if edge_length.get(routes[i][-1], 0.0) < min_edge_length]
-    return routes
+            edge = lane_edge(lanes[i])
+            routes[i].append(edge)
+            covered[i] += edge_length.get(edge, 0.0)
+            hops[i] += 1
+        active = [i for i in active if go_on(i)]
+    return routes, lanes
+
+
+def trigger_index(
+    route: Sequence[str], edge_length: Mapping[str, float], lookahead: float, min_edge_length: float
+) -> int:
+    """Where along ``route`` (the car on ``route[0]``) the router must draw further hops:
+    the first later edge at whose end less than ``lookahead`` m of route would remain,
+    moved on past edges shorter than ``min_edge_length`` (a car may cross them unseen);
+    the last edge when the route never gets that short."""
+    lengths = [edge_length.get(e, 0.0) for e in route]
+    last = len(route) - 1
+    after = 0.0
+    remaining = [0.0] * len(route)  # route left beyond the end of each edge
+    for i in range(last, -1, -1):
+        remaining[i] = after
+        after += lengths[i]
+    index = next((i for i in range(1, last + 1) if remaining[i] < lookahead), last)
+    while index < last and lengths[index] < min_edge_length:
+        index += 1
+    return max(index, min(1, last))
 
 
 def follow_edges(lane: str, edges: Sequence[str], successors: Successors) -> str | None:
@@ -101,8 +150,8 @@ class MinicityRouter(Router):
     Args:
         veh_id: Flow's vehicle id (informative).
         router_params: Flow's ``router_params`` (kept as given).
-        min_edge_length: keep hopping while the edge reached is shorter than this, m; 0 is
-            Flow's one hop.
+        lookahead: draw the next edges this far ahead of the car, m (0: Flow's one hop).
+        min_edge_length: never end a route on an edge shorter than this, m.
     """
 
     registered_name = "MinicityRouter"
@@ -113,16 +162,25 @@ class MinicityRouter(Router):
     }
 
     def __init__(
-        self, veh_id: str | None = None, router_params: Any = None, min_edge_length: float = 10.0
+        self,
+        veh_id: str | None = None,
+        router_params: Any = None,
+        lookahead: float = 60.0,
+        min_edge_length: float = 10.0,
     ) -> None:
         super().__init__(veh_id, router_params)
-        if not min_edge_length >= 0:
-            raise ValueError(f"min_edge_length must be >= 0 m, got {min_edge_length}")
+        for name, value in (("lookahead", lookahead), ("min_edge_length", min_edge_length)):
+            if not value >= 0:
+                raise ValueError(f"{name} must be >= 0 m, got {value}")
+        self.lookahead = float(lookahead)
         self.min_edge_length = float(min_edge_length)
         self._links_of: Any = None
         self._successors: dict[str, tuple[str, ...]] = {}
         self._lengths: dict[str, float] = {}
         self._forced = np.zeros(0, dtype=bool)
+        self._edge_pos: Mapping[str, int] = {}
+        #: per car: the route given, the lane it ends on, and the edge to extend it on
+        self._plan: dict[str, tuple[tuple[str, ...], str, int]] = {}
 
     def choose_route(
         self, current_edge: str, choices: Sequence[RouteChoice], rng: np.random.Generator
@@ -131,19 +189,24 @@ class MinicityRouter(Router):
         return None
 
     def _bind(self, lanes: Any) -> None:
-        """Read the network's lane links and edge lengths (once per built network)."""
+        """Read the network's lane links and edge lengths (once per started simulation)."""
         if self._links_of is lanes.links:
             return
         self._links_of = lanes.links
         self._successors = lane_successors(lanes.links)
         self._lengths = {e: float(f[1]) for e, f in lanes.edge_facts.items()}
+        self._edge_pos = lanes.edge_pos
         self._forced = np.zeros(len(lanes.edge_names), dtype=bool)
         self._forced[[i for e, i in lanes.edge_pos.items() if e in self.FORCED]] = True
+        self._plan = {}
 
     def route_vehicles(
         self, vk: Any, lanes: Any, rows: np.ndarray, rng: np.random.Generator
     ) -> tuple[list[int], list[list[str]]]:
         """New routes for the group's cars that need one.
+
+        A car needs one on its route's last edge, on the edge where its route gets shorter
+        than ``lookahead`` ahead, and on ``e_37``/``e_51`` off Flow's fixed way on.
 
         Args:
             vk: the vehicle kernel, its state of this step read (edges, lanes, route ends).
@@ -157,38 +220,58 @@ class MinicityRouter(Router):
         if lanes is None or not rows.size:
             return [], []
         self._bind(lanes)
-        names, ids = vk.edge_names, vk.table.ids
+        names, ids, plan = vk.edge_names, vk.table.ids, self._plan
+        row_list = rows.tolist()
         edge_index = vk.edge_index[rows]
-        at_end = edge_index == vk.route_end[rows]
-        todo = np.flatnonzero(at_end | self._forced[edge_index])
+        route_end = vk.route_end[rows]
+        trigger = np.fromiter(
+            (plan[ids[r]][2] if ids[r] in plan else -1 for r in row_list), np.int64, rows.size
+        )
+        due_mask = (edge_index == route_end) | (edge_index == trigger) | self._forced[edge_index]
+        todo = np.flatnonzero(due_mask)
         if not todo.size:
             return [], []
         lane_index = vk.lanes[rows[todo]].tolist()
-        due: list[tuple[int, str, tuple[str, ...]]] = []
-        for j, lane in zip(todo.tolist(), lane_index, strict=True):
-            row, edge = int(rows[j]), names[int(edge_index[j])]
+        due_rows, kept, starts, base, least = [], [], [], [], []
+        for j, lane_no in zip(todo.tolist(), lane_index, strict=True):
+            row, edge = row_list[j], names[int(edge_index[j])]
+            vid, lane = ids[row], f"{edge}_{lane_no}"
+            route: tuple[str, ...] = (edge,)
+            end_lane = lane
+            given = plan.get(vid)
+            if given is not None and edge in given[0]:
+                at = len(given[0]) - 1 - given[0][::-1].index(edge)
+                route, end_lane = given[0][at:], given[1]
             forced = self.FORCED.get(edge, ())
-            if forced and tuple(vk.get_route(ids[row])[1 : 1 + len(forced)]) == forced:
-                continue  # already on Flow's fixed route
-            due.append((row, f"{edge}_{lane}", forced))
-        if not due:
-            return [], []
-        starts, prefixes = [], []
-        for _, lane, forced in due:
-            reached = follow_edges(lane, forced, self._successors) if forced else lane
-            starts.append(reached if reached is not None else lane)
-            prefixes.append([lane_edge(lane), *forced] if reached is not None else [])
-        tails = random_routes(starts, self._successors, self._lengths, rng, self.min_edge_length)
+            if forced and route[1 : 1 + len(forced)] != forced:
+                reached = follow_edges(lane, forced, self._successors)
+                if reached is not None:
+                    route, end_lane = (edge, *forced), reached
+                elif edge_index[j] != route_end[j]:
+                    continue
+            elif edge_index[j] != route_end[j] and edge_index[j] != trigger[j]:
+                continue  # already on Flow's fixed way on
+            due_rows.append(row)
+            kept.append(route)
+            starts.append(end_lane)
+            base.append(sum(self._lengths.get(e, 0.0) for e in route[1:]))
+            least.append(1 if len(route) == 1 else 0)
+        hops, ends = random_routes(
+            starts, self._successors, self._lengths, rng,
+            self.min_edge_length, self.lookahead, base, least,
+        )  # fmt: skip
         out_rows, out_routes = [], []
-        for (row, _, forced), prefix, tail in zip(due, prefixes, tails, strict=True):
-            if forced and prefix:  # Flow's fixed route, continued at random past a short end
-                last_len = self._lengths.get(prefix[-1], 0.0)
-                route = prefix + (tail[1:] if last_len < self.min_edge_length else [])
-            else:
-                route = tail
-            if len(route) > 1:
-                out_rows.append(row)
-                out_routes.append(route)
+        for row, route, tail, end_lane in zip(due_rows, kept, hops, ends, strict=True):
+            new = (*route, *tail[1:])
+            if len(new) == 1:
+                continue  # a dead end: nothing to add
+            at = trigger_index(new, self._lengths, self.lookahead, self.min_edge_length)
+            plan[ids[row]] = (new, end_lane, self._edge_pos.get(new[at], -1))
+            out_rows.append(row)
+            out_routes.append(list(new))
+        if len(plan) > 2 * len(ids) + 64:  # forget cars that left
+            live = set(ids)
+            self._plan = {v: p for v, p in plan.items() if v in live}
         return out_rows, out_routes
 
 
