@@ -4,6 +4,7 @@ or ``convert``."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -158,3 +159,15 @@ def test_replay_default_out_blocked_by_a_file_says_so(tmp_path: Path) -> None:
         "plots (--out DIR)\n"
     )
     assert (tmp_path / "replay").read_text() == "not a folder"
+
+
+def test_no_help_text_holds_brackets_that_rich_would_swallow() -> None:
+    # typer renders help as rich markup: "[default: RUN_DIR/eval]" vanished from --help
+    swallowed = re.compile(r"\[[A-Za-z/$]")
+    commands = typer.main.get_command(app).commands  # type: ignore[attr-defined]
+    for name, command in commands.items():
+        texts = [command.help or ""] + [getattr(p, "help", None) or "" for p in command.params]
+        for text in texts:
+            assert not swallowed.search(text), (name, text)
+    shown = " ".join(flowrun("eval", "--help").stdout.split())
+    assert "(default OUT: RUN_DIR/eval)" in shown

@@ -69,8 +69,8 @@ def register(app: typer.Typer) -> None:
         out: Annotated[
             Path | None,
             out_option(
-                "the YAML as a new file OUT/<module name>.yaml (OUT ending in .yaml: that "
-                "file) [default: print it]"
+                "the YAML as a new file OUT/<module name>.yaml (an OUT ending in .yaml is "
+                "that file; default: print the YAML)"
             ),
         ] = None,
     ) -> None:

@@ -170,8 +170,8 @@ def register(app: typer.Typer) -> None:
         out: Annotated[
             Path | None,
             out_option(
-                "a new folder of --plot's PNGs, OUT/<log>-<timestamp>/ [default: OUT is "
-                "<log folder>/replay]"
+                "a new folder of --plot's PNGs, OUT/<log>-<timestamp>/ (default OUT: "
+                "<log folder>/replay)"
             ),
         ] = None,
         csv: Annotated[

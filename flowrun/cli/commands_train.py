@@ -38,7 +38,7 @@ if TYPE_CHECKING:
 RunDirArg = Annotated[Path, typer.Argument(help="A train run folder.", show_default=False)]
 EvalOutOpt = Annotated[
     Path | None,
-    out_option("the evaluation folders: OUT/<timestamp>-<seed>/ [default: OUT is RUN_DIR/eval]"),
+    out_option("the evaluation folders, OUT/<timestamp>-<seed>/ (default OUT: RUN_DIR/eval)"),
 ]
 
 
@@ -100,7 +100,7 @@ def train(
         str | None,
         typer.Option(
             "--ray-address",
-            help="Ray cluster for train.backend: rllib [default: $RAY_ADDRESS, else a local Ray].",
+            help="Ray cluster for train.backend: rllib (default: $RAY_ADDRESS, else a local Ray).",
         ),
     ] = None,
 ) -> None:

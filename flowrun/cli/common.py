@@ -77,7 +77,7 @@ def expand_home(path: Path | None) -> Path | None:
     return path.expanduser() if path is not None else None
 
 
-OutOpt = Annotated[Path, out_option("the run folders: OUT/<config name>/...")]
+OutOpt = Annotated[Path, out_option("the run folders, OUT/<config name>/...")]
 ConfigArg = Annotated[Path, typer.Argument(help="Experiment YAML file.", show_default=False)]
 AnyConfigArg = Annotated[
     Path,
