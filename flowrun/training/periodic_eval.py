@@ -4,8 +4,10 @@ Each evaluation rolls the current deterministic policy out for the same seeded e
 this process (the training envs run in subprocesses, so this process has no other SUMO), with
 a numpy copy of the policy network (a few microseconds a step instead of SB3's ~100-250 µs
 ``predict``). Scores are the episode returns in evaluation mode (Flow's ``env.evaluate``:
-the mean speed for the ring envs); the best model is the one whose last-half mean speed is
-highest relative to the all-human baseline of the same episodes (:meth:`EpisodeRunner.score`).
+the mean speed for the ring envs); the best model is the one whose worst episode's last-half
+mean speed is highest relative to the all-human baseline of the same episodes
+(:meth:`EpisodeRunner.score`). Envs that vary their network per episode spread the evaluation
+episodes over that variation (``evaluation_options``: the ring lengths of the training range).
 
 The history lives in ``eval_log/evaluations.npz`` (SB3's ``EvalCallback`` format: ``timesteps``,
 ``results``, ``ep_lengths``, plus ``last_half_speed``); a resumed run continues it and keeps
@@ -142,8 +144,10 @@ class EpisodeRunner:
 
         self.seeds = tuple(seeds)
         self.should_stop = should_stop
+        self.options: list[dict[str, Any]] = [{} for _ in self.seeds]
         self.baseline = self._baseline(cfg)
         self.env = make_env(cfg)  # after the baseline's env is closed: one SUMO a process
+        self.options = _spread_options(self.env, len(self.seeds))
 
     def _baseline(self, cfg: ExperimentConfig) -> list[float]:
         """Last-half mean speed of each seed's episode with the AVs driven like the humans."""
@@ -156,19 +160,24 @@ class EpisodeRunner:
             return [math.nan] * len(self.seeds)
         env = make_env(human)
         try:
-            runs = [_episode(env, seed, None, None, self.should_stop) for seed in self.seeds]
+            self.options = _spread_options(env, len(self.seeds))
+            runs = [
+                _episode(env, seed, None, None, self.should_stop, options)
+                for seed, options in zip(self.seeds, self.options, strict=True)
+            ]
             return [math.nan if r is None else r.last_half_speed for r in runs]
         finally:
             env.close()
 
     def score(self, scores: Sequence[EpisodeScore]) -> float:
-        """What picks the best model: the mean over episodes of the last-half mean speed as a
-        fraction of the all-human baseline's on the same seed (rings of different lengths
-        then count alike; raw speeds would favour the long rings). The mean return when
-        the env reports no speeds."""
+        """What picks the best model: the worst episode's last-half mean speed as a fraction of
+        the all-human baseline's on the same seed (rings of different lengths then count
+        alike, and a policy must be good on every one of them: the mean let a policy that
+        stops the AV on short rings win on its long ones). The mean return when the env
+        reports no speeds."""
         ratios = [s.last_half_speed / b for s, b in zip(scores, self.baseline, strict=True)]
         if all(math.isfinite(r) for r in ratios) and all(b > 0 for b in self.baseline):
-            return float(np.mean(ratios))
+            return float(min(ratios))
         return float(np.mean([s.episode_return for s in scores]))
 
     def run(
@@ -179,8 +188,8 @@ class EpisodeRunner:
         Returns ``None`` when ``should_stop`` became true on the way.
         """
         scores = []
-        for seed in self.seeds:
-            score = _episode(self.env, seed, act, normalize, self.should_stop)
+        for seed, options in zip(self.seeds, self.options, strict=True):
+            score = _episode(self.env, seed, act, normalize, self.should_stop, options)
             if score is None:
                 return None
             scores.append(score)
@@ -197,10 +206,11 @@ def _episode(
     act: Act | None,
     normalize: Callable[[np.ndarray], np.ndarray] | None,
     stop: Callable[[], bool] | None = None,
+    options: dict[str, Any] | None = None,
 ) -> EpisodeScore | None:
-    """One episode reset with ``seed``; ``act`` ``None`` sends no RL action. ``None`` when
-    ``stop()`` became true on the way."""
-    obs, _ = env.reset(seed=seed)
+    """One episode reset with ``seed`` (and reset ``options``); ``act`` ``None`` sends no RL
+    action. ``None`` when ``stop()`` became true on the way."""
+    obs, _ = env.reset(seed=seed, options=options or None)
     total, speeds, done = 0.0, [], False
     while not done:
         if stop is not None and stop():
@@ -215,6 +225,13 @@ def _episode(
         done = terminated or truncated
     half = speeds[len(speeds) // 2 :]
     return EpisodeScore(total, len(speeds), float(np.mean(half)))
+
+
+def _spread_options(env: Any, episodes: int) -> list[dict[str, Any]]:
+    """The env's reset options for ``episodes`` evaluation episodes (its
+    ``evaluation_options``, e.g. ring lengths spread over the trained range), else none."""
+    spread = getattr(getattr(env, "unwrapped", env), "evaluation_options", None)
+    return list(spread(episodes)) if callable(spread) else [{} for _ in range(episodes)]
 
 
 @dataclass

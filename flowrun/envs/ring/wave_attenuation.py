@@ -84,6 +84,7 @@ class WaveAttenuationEnv(RingAccelBase):
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
+        self._chosen_length: float | None = None  # set by reset(options=...)
         super().__init__(*args, **kwargs)
         self.ring_range()  # a bad ring_length fails here, not at the first reset
 
@@ -91,12 +92,42 @@ class WaveAttenuationEnv(RingAccelBase):
         """``(low, high)`` of the ring length draw, m; ``None`` keeps the network's length."""
         return ring_bounds(self.env_params.additional_params)
 
-    def episode_network(self) -> Network:
-        """The ring with a length drawn uniformly from the integers in ``ring_length``."""
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        """As :meth:`Env.reset`; ``options={"ring_length": L}`` sets this episode's length (m).
+
+        The length is still drawn first, so every other random draw of the episode is the
+        one a reset with the same seed and no options makes.
+        """
+        chosen = (options or {}).get("ring_length")
+        if chosen is not None and not (isinstance(chosen, int | float) and chosen > 0):
+            raise ConfigError(f"reset option ring_length must be a length > 0 m, got {chosen!r}")
+        self._chosen_length = None if chosen is None else float(chosen)
+        return super().reset(seed=seed, options=options)
+
+    def evaluation_options(self, episodes: int) -> list[dict[str, Any]]:
+        """Reset options that spread ``episodes`` evaluation episodes evenly over the range of
+        ring lengths (the midpoints of ``episodes`` equal slices of ``ring_length``, rounded half
+        up to whole metres: 228, 245 and 262 m for 3 episodes over [220, 270]), so an evaluation covers the short, dense rings and the long ones alike.
+        """
         bounds = self.ring_range()
         if bounds is None:
+            return [{} for _ in range(episodes)]
+        low, high = bounds
+        return [
+            {"ring_length": int(low + (high - low) * (i + 0.5) / episodes + 0.5)}
+            for i in range(episodes)
+        ]
+
+    def episode_network(self) -> Network:
+        """The ring with a length drawn uniformly from the integers in ``ring_length`` (or the
+        length given to :meth:`reset` in ``options``)."""
+        bounds = self.ring_range()
+        drawn = None if bounds is None else int(self.np_random.integers(bounds[0], bounds[1] + 1))
+        length = self._chosen_length if self._chosen_length is not None else drawn
+        if length is None:
             return self.initial_network
-        length = int(self.np_random.integers(bounds[0], bounds[1] + 1))
         return self.initial_network.with_params(length=length)
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
