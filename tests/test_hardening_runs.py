@@ -138,3 +138,14 @@ def test_eval_with_an_override_that_changes_the_observations_is_one_line(
     )
     (evaluation,) = (folder / "eval").iterdir()
     assert json.loads((evaluation / "status.json").read_text())["status"] == "failed"
+
+
+def test_resume_with_out_is_refused_not_ignored(tmp_path: Path) -> None:
+    folder = run_folder(tmp_path, "ring_wave.yaml", {"status": "interrupted", "timesteps": 10})
+    before = snapshot(folder)
+    error = one_error("train", ROOT / "configs" / "ring_wave.yaml", "--resume", folder,
+                      "--out", tmp_path / "elsewhere")  # fmt: skip
+    assert error == (
+        f"error: --out has no effect with --resume: training continues in {folder}; drop --out"
+    )
+    assert snapshot(folder) == before and not (tmp_path / "elsewhere").exists()

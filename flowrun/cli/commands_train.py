@@ -124,6 +124,10 @@ def train(
     overrides = overrides_with_seed(set_, seed)
     if seed is not None:
         overrides.append(f"train.seed={seed}")
+    if resume is not None and out != DEFAULT_OUT:
+        raise FlowrunError(
+            f"--out has no effect with --resume: training continues in {resume}; drop --out"
+        )
     if resume is not None:
         saved = resume / "config.yaml"
         if saved.is_file() and load_config(saved).train is None:
