@@ -4,9 +4,12 @@ step (real SUMO: a short ring, and the figure eight for the step after a removal
 
 from __future__ import annotations
 
+import pytest
+
 from flowrun.config.params import EnvParams, NetParams, SumoParams, VehicleParams
 from flowrun.controllers import ContinuousRouter, IDMController, RLController
 from flowrun.envs import TestEnv
+from flowrun.errors import SimulationError
 from flowrun.networks import RingNetwork
 from tests.test_open_kernel import on_network
 
@@ -39,6 +42,9 @@ def test_a_removed_car_leaves_every_getter_in_the_same_step() -> None:
         assert vk.num_rl_vehicles == 1
         assert vk.get_speed("test_0", error=None) is None
         assert vk.get_speed(["test_0", "test_1"], error=-1) == [-1, speed_before]
+        # the ring's fixed population cannot go on without them: one clear error, not SUMO's
+        with pytest.raises(SimulationError, match=r"remove\('test_0', 'test_rl_0'\)"):
+            env.step(None)
     finally:
         env.close()
 

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from flowrun.controllers.base import CarFollowingInputs
+from flowrun.errors import SimulationError
 from flowrun.kernel.geometry import LaneGeometry, RingEdges, RingPlacement
 from flowrun.kernel.lane_graph import LaneGraph
 from flowrun.kernel.lanes import LaneTable
@@ -202,6 +203,13 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         if not self.ring_path:
             speed = self._update_open(first)
         else:
+            if self._pending_removal:
+                raise SimulationError(
+                    f"k.vehicle.remove({', '.join(map(repr, self._pending_removal))}) on a ring "
+                    "whose cars all use ContinuousRouter: flowrun keeps those cars as a fixed "
+                    "population, so the run cannot go on; remove no car there, or give a "
+                    "vehicle type another router (the general path, where cars come and go)"
+                )
             ids = self.table.ids
             self.prev_speed = self.speed
             n = len(ids)
