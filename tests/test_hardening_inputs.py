@@ -70,3 +70,26 @@ def test_the_largest_seed_is_accepted() -> None:
     result = CliRunner().invoke(app, ["validate", str(SUGIYAMA), "--seed", str(MAX_SEED)])
     assert result.exit_code == 0, result.output
     assert yaml.safe_load(result.stdout)["sim"]["seed"] == MAX_SEED
+
+
+def test_a_latin1_terminal_gets_question_marks_not_a_traceback(tmp_path: Path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    from flowrun.recording import McapRecorder
+    from flowrun.recording.synthetic import ring_frames
+
+    log = tmp_path / "run_0.mcap"
+    meta = {"config_name": "sugiyama", "seed": "0", "flowrun_version": "0.1.0",
+            "platform_version": "Linux-6.18.0-x86_64-with-glibc2.39",
+            "stable_baselines3_version": "2.9.2"}  # fmt: skip
+    with McapRecorder(log, metadata=meta, attachments={}) as rec:
+        for frame, stats in ring_frames(22, 20):
+            rec.write(frame, stats)
+    flowrun = str(Path(sys.executable).with_name("flowrun"))
+    env = {**os.environ, "PYTHONIOENCODING": "latin-1", "COLUMNS": "30"}  # cells cut with '…'
+    done = subprocess.run([flowrun, "replay", str(log)], capture_output=True, env=env)
+    assert done.returncode == 0, done.stderr.decode("latin-1")
+    out = done.stdout.decode("latin-1")
+    assert "?" in out and "mean speed" in out.replace("\n", " ").replace("|", " ")

@@ -26,9 +26,11 @@ exit code 130 (SIGINT) or 143 (SIGTERM).
 from __future__ import annotations
 
 import functools
+import io
 import signal
+import sys
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, ParamSpec, TypeVar
 
@@ -94,11 +96,23 @@ COMMON_OPTIONS = ("--out", "--seed", "--set")
 NO_SEED_OR_SET = "runs no simulation, so it takes no --seed or --set"
 
 
+def printable_output() -> None:
+    """Print what the terminal's encoding cannot show as ``?`` instead of failing: a Latin-1
+    terminal (``PYTHONIOENCODING=latin-1``) made the table's "..." raise a traceback after a
+    finished run."""
+    for stream in (sys.stdout, sys.stderr):
+        if isinstance(stream, io.TextIOWrapper):
+            with suppress(ValueError, io.UnsupportedOperation):
+                stream.reconfigure(errors="replace")
+
+
 def guarded(fn: Callable[P, R]) -> Callable[P, R]:
-    """Turn a :class:`FlowrunError` raised by a command into one stderr line and exit code 1."""
+    """Turn a :class:`FlowrunError` raised by a command into one stderr line and exit code 1
+    (and make the output streams replace what their encoding cannot show)."""
 
     @functools.wraps(fn)
     def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
+        printable_output()
         try:
             return fn(*args, **kwargs)
         except FlowrunError as err:
