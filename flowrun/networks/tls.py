@@ -18,6 +18,7 @@ from xml.sax.saxutils import quoteattr
 
 from flowrun.config.traffic_lights import Phase, TlsProgram, TrafficLightParams
 from flowrun.errors import ConfigError
+from flowrun.networks.tls_detectors import check_detector_room
 
 if TYPE_CHECKING:
     from flowrun.networks.base import Network
@@ -121,6 +122,7 @@ def write_tls_file(params: TrafficLightParams, net_file: Path, out_dir: Path) ->
     programs = resolve_programs(params, read_net_lights(net_file))
     if not programs:
         return None
+    check_detector_room(programs, net_file)
     path = out_dir / f"{net_file.name.removesuffix('.net.xml')}.tls.add.xml"
     path.write_text(tls_additional_xml(programs))
     return path
@@ -130,11 +132,12 @@ def check_programs(network: Network, params: TrafficLightParams) -> None:
     """Build ``network`` with netconvert (in a temporary folder) and check ``params`` on it.
 
     Raises:
-        ConfigError: see :func:`resolve_programs`.
+        ConfigError: see :func:`resolve_programs`; an actuated program without room
+            for its detectors (:mod:`flowrun.networks.tls_detectors`).
         SimulationError: netconvert failed.
     """
     from flowrun.networks.build import build_network
 
     with tempfile.TemporaryDirectory(prefix="flowrun-tls-") as tmp:
         net_file = build_network(network.spec, Path(tmp), name=network.network_type or "network")
-        resolve_programs(params, read_net_lights(net_file))
+        check_detector_room(resolve_programs(params, read_net_lights(net_file)), net_file)
