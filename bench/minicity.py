@@ -1,6 +1,6 @@
 """What MinicityRouter costs per simulation step on Flow's mini city (100 cars).
 
-Run: ``.venv/bin/python bench/minicity.py [--steps 1500] [--seed 0]``. Runs
+Run: ``.venv/bin/python bench/minicity.py [--steps 1500] [--seed 0] [--lookahead M]``. Runs
 ``configs/minicity.yaml`` for ``--steps`` simulation steps (no recording) and prints, in
 microseconds per simulation step (medians over the steps): the whole step of the env,
 SUMO's own ``simulationStep``, and the routers (``GroupRouters.step``, which decide and set
@@ -40,8 +40,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=1500, help="simulation steps")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--lookahead", type=float, default=None, help="router lookahead, m")
     args = parser.parse_args()
-    cfg = load_config(CONFIG, ["env.sims_per_step=1", f"env.horizon={args.steps}"])
+    sets = ["env.sims_per_step=1", f"env.horizon={args.steps}"]
+    if args.lookahead is not None:
+        sets += [f"vehicles.{i}.routing_controller.lookahead={args.lookahead}" for i in (0, 1)]
+    cfg = load_config(CONFIG, sets)
     env = make_env(cfg)
     try:
         env.reset(seed=args.seed)
@@ -67,7 +71,7 @@ def main() -> None:
     finally:
         env.close()
     us = 1e6
-    print(f"minicity, {len(steps)} simulation steps, {len(vk.get_ids())} cars")
+    print(f"minicity, {len(steps)} simulation steps, {len(vk.get_ids())} cars, seed {args.seed}")
     print(f"env step (median)      {statistics.median(steps) * us:8.1f} us")
     print(f"SUMO simulationStep    {statistics.median(sumo_step.times) * us:8.1f} us")
     print(f"routers (median)       {statistics.median(router_step.times) * us:8.1f} us")
