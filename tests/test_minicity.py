@@ -179,7 +179,7 @@ def city(cars: int = 40, seed: int = 3, dt: float = 0.1) -> AccelEnv:
     vehicles.add(
         "idm",
         acceleration_controller=ControllerSpec("IDM", {}),
-        routing_controller=ControllerSpec("MinicityRouter"),
+        routing_controller=(MinicityRouter, {}),  # Flow's form
         car_following_params=SumoCarFollowingParams(speed_mode="right_of_way", impatience=0),
         lane_change_params=SumoLaneChangeParams(lane_change_mode="no_lc_safe"),
         num_vehicles=cars,
@@ -229,6 +229,7 @@ def test_router_keeps_every_car_driving_on_valid_successors_and_nobody_leaves() 
         env.reset(seed=3)
         vk, v = env.k.vehicle, env.k.vehicle.api.vehicle
         succ = edge_successors(env)
+        starts = minicity_spec().edge_starts
         visited: dict[str, set[str]] = {}
         forced_seen = 0
         for _ in range(600):
@@ -242,6 +243,8 @@ def test_router_keeps_every_car_driving_on_valid_successors_and_nobody_leaves() 
                 if not edge.startswith(":"):
                     assert ahead[0] == edge and len(ahead) >= 2, (vid, edge, ahead)
                     visited.setdefault(vid, set()).add(edge)
+                    x = starts[edge] + v.getLanePosition(vid)  # Flow's edge starts
+                    assert abs(vk.get_x_by_id(vid) - x) < 1e-6, vid
                 for a, b in itertools.pairwise(ahead):
                     assert b in succ[a], (vid, a, b)
                 if edge in ("e_37", "e_51"):  # Flow's fixed way on
