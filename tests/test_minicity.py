@@ -87,6 +87,10 @@ def test_minicity_is_registered_and_takes_no_parameters() -> None:
     assert network_class("minicity") is MiniCityNetwork
     assert network_class("MiniCityNetwork") is MiniCityNetwork
     assert MiniCityNetwork.ADDITIONAL_NET_PARAMS == {}
+    from flowrun.scenarios import MiniCityScenario  # Flow < 0.5 path
+    from flowrun.scenarios.minicity import ADDITIONAL_NET_PARAMS
+
+    assert MiniCityScenario is MiniCityNetwork and ADDITIONAL_NET_PARAMS == {}
     with pytest.raises(ConfigError, match="takes no parameters") as err:
         MiniCityNetwork.resolve_params({"scaling": 2})
     assert err.value.path == "scaling"

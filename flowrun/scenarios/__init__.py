@@ -1,7 +1,7 @@
 """Flow's old names for networks (``flow.scenarios``): ``LoopScenario`` is the ring,
 ``Figure8Scenario``/``FigureEightScenario`` the figure eight, ``MergeScenario`` the merge and
-``HighwayScenario`` the highway, ``BottleneckScenario`` the bottleneck and
-``HighwayRampsScenario`` the highway with ramps."""
+``HighwayScenario`` the highway, ``BottleneckScenario`` the bottleneck,
+``HighwayRampsScenario`` the highway with ramps and ``MiniCityScenario`` the mini city."""
 
 from flowrun.networks.base import Network
 from flowrun.networks.bottleneck import BottleneckScenario
@@ -9,6 +9,7 @@ from flowrun.networks.figure_eight import Figure8Scenario, FigureEightScenario
 from flowrun.networks.highway import HighwayScenario
 from flowrun.networks.highway_ramps import HighwayRampsScenario
 from flowrun.networks.merge import MergeScenario
+from flowrun.networks.minicity import MiniCityScenario
 from flowrun.networks.ring import LoopScenario
 
 #: Flow < 0.5 name of the network base class
@@ -22,5 +23,6 @@ __all__ = [
     "HighwayScenario",
     "LoopScenario",
     "MergeScenario",
+    "MiniCityScenario",
     "Scenario",
 ]
