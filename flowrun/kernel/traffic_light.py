@@ -76,7 +76,8 @@ class TrafficLightKernel:
         """Mark the snapshot stale after a simulation step: every light's state, phase,
         program and next switch time are read when first asked (once per step)."""
         self._stale = self.api is not None
-        self._pinned.clear()
+        if self._pinned:  # pins of a step nobody read: that step is over
+            self._pinned.clear()
 
     def _read(self) -> None:
         """Read every light's state, phase, program and next switch time, and the time."""
