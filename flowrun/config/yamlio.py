@@ -245,6 +245,8 @@ def parse_yaml(text: str, source: str) -> tuple[Any, Locations]:
         what = err.problem or err.context or "unreadable"
         if err.problem and err.context:
             what = f"{err.problem} ({err.context})"
+        if "nesting depth" in what:  # PyYAML >= 6.0.3 stops deep documents itself
+            what = f"nested too deeply to read (more than {MAX_DEPTH} levels is never a config)"
         raise ConfigError(f"invalid YAML: {what}", "", where) from None
     except yaml.reader.ReaderError as err:  # a NUL or another character YAML forbids
         line = text.count("\n", 0, max(err.position, 0)) + 1

@@ -107,9 +107,11 @@ class WaveAttenuationEnv(RingAccelBase):
         return super().reset(seed=seed, options=options)
 
     def evaluation_options(self, episodes: int) -> list[dict[str, Any]]:
-        """Reset options that spread ``episodes`` evaluation episodes evenly over the range of
-        ring lengths (the midpoints of ``episodes`` equal slices of ``ring_length``, rounded half
-        up to whole metres: 228, 245 and 262 m for 3 episodes over [220, 270]), so an evaluation covers the short, dense rings and the long ones alike.
+        """Reset options that spread ``episodes`` evaluation episodes evenly over the ring lengths.
+
+        The midpoints of ``episodes`` equal slices of ``ring_length``, rounded half up to whole
+        metres (228, 245 and 262 m for 3 episodes over [220, 270]): an evaluation covers the
+        short, dense rings and the long ones alike.
         """
         bounds = self.ring_range()
         if bounds is None:
