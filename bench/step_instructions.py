@@ -62,7 +62,9 @@ def main() -> None:
         env.close()
         return
     if mode in ("grid", "grid_raw"):
-        env = make_env(grid_config(3, 3))
+        grid0 = grid_config(3, 3)
+        grid0.env.horizon = max(grid0.env.horizon, steps)  # one episode (Flow's 400 < 600)
+        env = make_env(grid0)
         env.reset(seed=0)
         if mode == "grid_raw":
             assert env.k.process is not None
