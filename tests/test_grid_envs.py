@@ -105,6 +105,21 @@ def test_switch_goes_through_yellow_for_switch_time_and_ignores_requests_meanwhi
     assert list(timers.features()) == [0.0, 0.0, 1.0]
 
 
+def test_timers_of_several_lights_step_independently_and_pack_their_features() -> None:
+    timers = SwitchTimers(3, switch_time=2.0, dt=0.5)
+    assert timers.step(np.array([True, False, True])) == [(0, 0, True), (2, 0, True)]
+    assert timers.step(np.array([False, True, False])) == [(1, 0, True)]
+    for _ in range(2):
+        assert timers.step(np.zeros(3, dtype=bool)) == []
+    assert timers.step(np.zeros(3, dtype=bool)) == [(0, 1, False), (2, 1, False)]  # 2 s
+    assert timers.last_change.tolist() == [2.0, 1.5, 2.0]
+    # features() and the packed array are the three per-light arrays, concatenated
+    expected = [2.0, 1.5, 2.0, 1.0, 1.0, 1.0, 0.0, 1.0, 0.0]
+    assert timers.features().tolist() == timers.packed.tolist() == expected
+    timers.reset()
+    assert timers.packed.tolist() == [0.0] * 9 and timers.direction.tolist() == [0.0] * 3
+
+
 def test_phase_states_match_flows_for_four_links() -> None:
     vertical = [True, False, True, False]  # SUMO's order: from above, right, below, left
     assert phase_state(vertical, 0, False) == "GrGr"
