@@ -279,7 +279,8 @@ def _check_traffic_lights(cfg: ExperimentConfig, network: Any, loc: Locations) -
     if tls.controller is not None and network.spec.net_file is None and no_lights:
         raise loc.error(
             f"controller {tls.controller} switches traffic lights, but the "
-            f"{cfg.network.type} network has none (a node needs type 'traffic_light')",
+            f"{cfg.network.type} network has none (give a node type 'traffic_light' or "
+            "add one under traffic_lights.lights)",
             (*at, "controller"),
         )
     params = tls.programs

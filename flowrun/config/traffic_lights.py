@@ -218,7 +218,7 @@ class TrafficLightParams:
                 where = f"its lights are at {', '.join(nodes)}" if nodes else "it has none"
                 raise ConfigError(
                     f"no traffic-light junction {node_id!r} in the network{hint}; {where} "
-                    "(a node needs type 'traffic_light')",
+                    "(a light goes on a junction node of the network)",
                     path=f"traffic_lights.{node_id}",
                 )
             out.append(_program(node_id, props))
