@@ -41,6 +41,7 @@ from flowrun.errors import ConfigError
 from flowrun.networks import MiniCityNetwork
 from flowrun.networks.minicity import minicity_spec
 from flowrun.networks.registry import network_class
+from tests.sumo_truth import compare_leaders_with_sumo
 
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "minicity.yaml"
 
@@ -267,22 +268,7 @@ def test_leaders_and_headways_equal_sumos_getleader_for_every_car() -> None:
     env = city(cars=40)
     try:
         env.reset(seed=3)
-        vk, v = env.k.vehicle, env.k.vehicle.api.vehicle
-        compared = across_junction = 0
-        for _ in range(300):
-            env.step(None)
-            for vid in vk.get_ids():
-                found = v.getLeader(vid, 500.0)
-                ours = vk.get_leader(vid)
-                if not found or not found[0]:
-                    assert ours is None, vid
-                    assert vk.get_headway(vid) == math.inf
-                    continue
-                assert ours == found[0], vid
-                gap = found[1] + v.getMinGap(vid)
-                assert vk.get_headway(vid) == pytest.approx(gap, abs=1e-6), vid
-                compared += 1
-                across_junction += vk.get_edge(vid) != vk.get_edge(ours)
+        compared, across_junction = compare_leaders_with_sumo(env, 300)
         assert compared > 3000
         assert across_junction > 1000  # leaders past the lane's end really were exercised
     finally:

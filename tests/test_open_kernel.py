@@ -27,6 +27,7 @@ from flowrun.config.params import (
 from flowrun.envs.base import Env
 from flowrun.networks.base import Edge, Network, NetworkSpec, Node, StartPositions
 from flowrun.networks.registry import network_class
+from tests.sumo_truth import compare_leaders_with_sumo
 
 pytestmark = pytest.mark.sumo
 
@@ -151,23 +152,7 @@ def test_leaders_and_headways_equal_sumos_getleader_for_every_car(name: str) -> 
     env = make_on(name)
     try:
         env.reset(seed=1)
-        vk = env.k.vehicle
-        v = vk.api.vehicle
-        compared = across_junction = 0
-        for _ in range(400):
-            env.step(None)
-            for vid in vk.get_ids():
-                found = v.getLeader(vid, 500.0)
-                ours = vk.get_leader(vid)
-                if not found or not found[0]:
-                    assert ours is None, vid
-                    assert vk.get_headway(vid) == math.inf
-                    continue
-                assert ours == found[0], vid
-                gap = found[1] + v.getMinGap(vid)
-                assert vk.get_headway(vid) == pytest.approx(gap, abs=1e-6), vid
-                compared += 1
-                across_junction += vk.get_edge(vid) != vk.get_edge(ours)
+        compared, across_junction = compare_leaders_with_sumo(env, 400)
         assert compared > 2000
         assert across_junction > 50  # leaders past the lane's end really were exercised
     finally:
