@@ -44,7 +44,8 @@ class MultiAgentEnv(Env, ParallelEnv[str, Obs, Action]):
     SUMO for the step, as Flow; an id not in ``possible_agents`` is an error), applies them
     (clipped to the action space when ``env_params.clip_actions``) for ``sims_per_step``
     simulation steps, and returns ``observations, rewards, terminations, truncations, infos``
-    keyed by the agents live at the start of the step plus those that entered during it.
+    keyed by the agents live at the start of the step plus those that entered during it
+    (except in the step that ends the episode: a car entering then never becomes an agent).
 
     Termination: an agent that left the network is terminated (its observation zeros and its
     reward 0, as Flow) and leaves ``agents``; a collision terminates every agent;
@@ -172,13 +173,17 @@ class MultiAgentEnv(Env, ParallelEnv[str, Obs, Action]):
         left, entered = self._sync_agents()
         states = self.get_state()
         reward = self.compute_reward(applied, fail=crash)
+        truncated = self.step_counter >= self.env_params.horizon
+        if crash or truncated:
+            # a car that entered in the step ending the episode never was an agent: it is not
+            # reported (PettingZoo: an agent not in ``agents`` before was "dead last turn")
+            entered = []
         keys = live + entered
         rewards = {a: self._agent_reward(reward, a, a in left) for a in keys}
         records = self.records
         shared = float(np.mean(list(rewards.values()))) if rewards else 0.0
         for i in range(first, len(records)):
             records[i].reward = shared
-        truncated = self.step_counter >= self.env_params.horizon
         terminations = {a: crash or a in left for a in keys}
         truncations = {a: truncated and not terminations[a] for a in keys}
         obs = {a: self._obs(None if a in left else states.get(a)) for a in keys}
