@@ -83,11 +83,11 @@ def test_impossible_values_are_refused_at_their_line(
 @pytest.mark.parametrize(
     ("old", "new", "key", "expected"),
     [
-        ("batch_size: 600", "batch_size: 0", "train.hyperparams.batch_size", ">= 1"),
+        ("batch_size: 1000", "batch_size: 0", "train.hyperparams.batch_size", ">= 1"),
         ("n_steps: 3000", "n_steps: -1", "train.hyperparams.n_steps", ">= 1"),
         ("gamma: 0.999", "gamma: 2", "train.hyperparams.gamma", "<= 1"),
         ("gamma: 0.999", "gamma: .nan", "train.hyperparams.gamma", "finite"),
-        ("learning_rate: 1.0e-3", "learning_rate: {linear: [.nan, 0]}",
+        ("learning_rate: 3.0e-4", "learning_rate: {linear: [.nan, 0]}",
          "train.hyperparams.learning_rate.linear[0]", "finite"),
         ("count: 1\n", "count: 0\n", "env.class", "RLController"),
     ],
