@@ -21,10 +21,10 @@ from flowrun.envs.grid_defaults import grid_config
 GRIDS = {"grid0": (3, 3), "grid1": (5, 5)}
 
 
-def main() -> None:
-    mode, name, steps = sys.argv[1], sys.argv[2], int(sys.argv[3])
+def run_grid(mode: str, name: str, steps: int) -> None:
+    """``steps`` steps of grid ``name``: ``raw`` SUMO alone, otherwise the env."""
     config = grid_config(*GRIDS[name])
-    config.env.horizon = max(config.env.horizon, steps)  # one episode
+    config.env.horizon = max(config.env.horizon, steps)  # one episode (Flow's 400 < 600)
     env = make_env(config)
     env.reset(seed=0)
     if mode == "raw":
@@ -38,6 +38,11 @@ def main() -> None:
         for _ in range(steps):
             env.step(rng.uniform(-1, 1, n_actions).astype(np.float32))
     env.close()
+
+
+def main() -> None:
+    """Command line: mode, grid name, steps."""
+    run_grid(sys.argv[1], sys.argv[2], int(sys.argv[3]))
 
 
 if __name__ == "__main__":

@@ -25,11 +25,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
 from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
-from flowrun.envs.grid_defaults import grid_config
 from flowrun.experiment.runner import Experiment
 from flowrun.recording.writer import McapRecorder
 
@@ -62,21 +59,9 @@ def main() -> None:
         env.close()
         return
     if mode in ("grid", "grid_raw"):
-        grid0 = grid_config(3, 3)
-        grid0.env.horizon = max(grid0.env.horizon, steps)  # one episode (Flow's 400 < 600)
-        env = make_env(grid0)
-        env.reset(seed=0)
-        if mode == "grid_raw":
-            assert env.k.process is not None
-            api = env.k.process.api
-            for _ in range(steps):
-                api.simulationStep()
-        else:
-            rng = np.random.default_rng(0)
-            n_actions = env.action_space.shape[0]  # type: ignore[index]
-            for _ in range(steps):
-                env.step(rng.uniform(-1, 1, n_actions).astype(np.float32))
-        env.close()
+        from grid_steps import run_grid  # bench/ is this script's folder
+
+        run_grid("raw" if mode == "grid_raw" else "env", "grid0", steps)
         return
     if mode == "merge":
         merge = load_config(CONFIGS / "merge.yaml", [f"env.horizon={steps}"])

@@ -518,9 +518,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             else:
                 probs = np.array([p for _, p in choices], dtype=np.float64)
                 route = choices[int(self.rng.choice(len(choices), p=probs / probs.sum()))][0]
-            self.api.vehicle.setRoute(self.table.ids[r], list(route))
-            self._route_of[self.table.ids[r]] = tuple(route)
-            self._route_end[r] = self._lanes.edge_pos.get(route[-1], -1)
+            self.reroute_now([r], [route])
 
     def reroute_now(self, rows: Sequence[int], routes: Sequence[Sequence[str]]) -> None:
         """Give the cars of ``rows`` new routes at once (a router during the update)."""
