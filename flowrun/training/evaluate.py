@@ -184,7 +184,7 @@ def evaluate(
     except (OSError, ValueError, KeyError, zipfile.BadZipFile) as err:
         raise TrainingError(f"cannot load {path}: {err}") from None
     stats = BEST_VECNORMALIZE if path.name == BEST_MODEL else VECNORMALIZE
-    normalize = _load_normalize(run_dir / stats) if tc.normalize else None
+    normalize = load_normalize(run_dir / stats) if tc.normalize else None
 
     expected = policy.observation_space.shape
 
@@ -271,7 +271,7 @@ def _stop_exit_code(should_stop: StopAsked) -> int:
     return code if isinstance(code, int) else 130
 
 
-def _load_normalize(path: Path) -> Any:
+def load_normalize(path: Path) -> Any:
     if not path.is_file():
         raise TrainingError(f"train.normalize is on but {path} is missing")
     try:

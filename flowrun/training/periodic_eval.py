@@ -162,7 +162,7 @@ class EpisodeRunner:
         try:
             self.options = _spread_options(env, len(self.seeds))
             runs = [
-                _episode(env, seed, None, None, self.should_stop, options)
+                play_episode(env, seed, None, None, self.should_stop, options)
                 for seed, options in zip(self.seeds, self.options, strict=True)
             ]
             return [math.nan if r is None else r.last_half_speed for r in runs]
@@ -189,7 +189,7 @@ class EpisodeRunner:
         """
         scores = []
         for seed, options in zip(self.seeds, self.options, strict=True):
-            score = _episode(self.env, seed, act, normalize, self.should_stop, options)
+            score = play_episode(self.env, seed, act, normalize, self.should_stop, options)
             if score is None:
                 return None
             scores.append(score)
@@ -200,7 +200,7 @@ class EpisodeRunner:
         self.env.close()
 
 
-def _episode(
+def play_episode(
     env: Any,
     seed: int,
     act: Act | None,
