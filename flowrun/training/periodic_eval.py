@@ -144,7 +144,6 @@ class EpisodeRunner:
 
         self.seeds = tuple(seeds)
         self.should_stop = should_stop
-        self.options: list[dict[str, Any]] = [{} for _ in self.seeds]
         self.baseline = self._baseline(cfg)
         self.env = make_env(cfg)  # after the baseline's env is closed: one SUMO a process
         self.options = _spread_options(self.env, len(self.seeds))
@@ -160,10 +159,10 @@ class EpisodeRunner:
             return [math.nan] * len(self.seeds)
         env = make_env(human)
         try:
-            self.options = _spread_options(env, len(self.seeds))
+            spread = _spread_options(env, len(self.seeds))  # as the policy's episodes
             runs = [
                 play_episode(env, seed, None, None, self.should_stop, options)
-                for seed, options in zip(self.seeds, self.options, strict=True)
+                for seed, options in zip(self.seeds, spread, strict=True)
             ]
             return [math.nan if r is None else r.last_half_speed for r in runs]
         finally:
