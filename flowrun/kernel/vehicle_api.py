@@ -96,7 +96,8 @@ class FlowVehicleGetters:
     @property
     def num_vehicles(self) -> int:
         """Number of vehicles in the network (a car removed this step no longer counts)."""
-        return self.table.size - len(self._removed())
+        removed = self._pending_removal
+        return self.table.size - (len(set(removed)) if removed else 0)
 
     @property
     def num_rl_vehicles(self) -> int:
@@ -109,8 +110,10 @@ class FlowVehicleGetters:
         return set(self._pending_removal) if self._pending_removal else set()
 
     def _present(self, ids: list[str]) -> list[str]:
+        if not self._pending_removal:  # the usual step: no set built
+            return ids
         gone = self._removed()
-        return [vid for vid in ids if vid not in gone] if gone else ids
+        return [vid for vid in ids if vid not in gone]
 
     def get_ids(self) -> list[str]:
         """All vehicle ids, in placement order."""
