@@ -10,6 +10,7 @@ import numpy as np
 
 from flowrun.config.params import SumoParams
 from flowrun.errors import SimulationError
+from flowrun.kernel.lane_neighbours import lane_graph
 from flowrun.kernel.lanes import LaneTable
 from flowrun.kernel.network import NetworkKernel
 from flowrun.kernel.population import VehicleTable
@@ -96,6 +97,7 @@ class Kernel:
         self.vehicle = kernel_class(table, spec, self.sim_params.sim_step, rng)
         self.vehicle.read_xy = read_xy
         self.vehicle.group_routers = self.group_routers
+        self.vehicle.lane_view = lane_graph(self.network)  # Flow's lane leaders' search
         self.vehicle.attach(api, lanes)
         self.simulation.attach(api)
         self.traffic_light.attach(api)

@@ -26,8 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from flowrun.kernel.lanes import LaneTable
-    from flowrun.networks.base import NetworkSpec
+    from flowrun.kernel.network import NetworkKernel
 
 #: Flow's gap (m) to a lane's leader or follower when there is none.
 NO_NEIGHBOUR_GAP = 1000.0
@@ -54,30 +53,14 @@ class LaneGraphView:
     num_edges: int
 
 
-def lane_graph(spec: NetworkSpec, table: LaneTable | None) -> LaneGraphView:
-    """The lanes SUMO built (``table``, open networks), or a closed ring's edges in order
-    (lane ``i`` leads to lane ``i`` of the next edge)."""
-    order = [e.id for e in spec.edges]
-    by_id = {e.id: e for e in spec.edges}
-    if table is not None:
-        facts = table.edge_facts
-        return LaneGraphView(
-            lambda e: by_id[e].lanes if e in by_id else facts.get(e, (1, 0.0, 0.0))[0],
-            table.next_lanes, table.prev_lanes,
-            lambda e: float(facts.get(e, (0, 0.0, 0.0))[1]), len(facts),
-        )  # fmt: skip
-
-    def step(edge: str, lane: int, by: int) -> list[tuple[str, int]]:
-        if not spec.closed or edge not in by_id:
-            return []
-        other = by_id[order[(order.index(edge) + by) % len(order)]]
-        return [(other.id, lane)] if lane < other.lanes else []
-
+def lane_graph(network: NetworkKernel) -> LaneGraphView:
+    """The search's view of ``k.network``: its lanes per edge, Flow's ``next_edge`` /
+    ``prev_edge`` (the lanes SUMO built; a closed ring's edges in order) and edge lengths."""
+    lanes = network.lanes
+    count = len(lanes.edge_facts) if lanes is not None else len(network.spec.edges)
     return LaneGraphView(
-        lambda e: by_id[e].lanes if e in by_id else 1,
-        lambda e, lane: step(e, lane, 1), lambda e, lane: step(e, lane, -1),
-        lambda e: float(by_id[e].length) if e in by_id else 0.0, len(order),
-    )  # fmt: skip
+        network.num_lanes, network.next_edge, network.prev_edge, network.edge_length, count
+    )
 
 
 @dataclass(frozen=True)

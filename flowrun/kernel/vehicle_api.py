@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from flowrun.kernel.lane_neighbours import LaneNeighbours, lane_graph, lane_neighbours
+from flowrun.kernel.lane_neighbours import LaneGraphView, LaneNeighbours, lane_neighbours
 
 if TYPE_CHECKING:
     from flowrun.kernel.population import Population, VehicleTable
@@ -73,6 +73,8 @@ class FlowVehicleGetters:
     controllers: Any = None
     _edges_cache: list[str] | None
     _pending_removal: list[str]
+    #: the network as Flow's lane-neighbour search walks it (set by the kernel at reset)
+    lane_view: LaneGraphView
     _route_end: np.ndarray
     _stale_edges: bool
 
@@ -432,7 +434,7 @@ class FlowVehicleGetters:
         edges = self.edges
         return lane_neighbours(
             self.table.row(veh_id), edges, self.lanes, self.lane_pos, self.table.lengths,
-            lane_graph(self.spec, getattr(self, "_lanes", None)),
+            self.lane_view,
         )  # fmt: skip
 
     def _ids_or_blank(self, row: int) -> str:
