@@ -334,6 +334,7 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (TrainConfig, "seed"): _seed,
     (TrainConfig, "eval_freq"): at_least(0),
     (TrainConfig, "eval_episodes"): at_least(1, high=1e6),
+    (TrainConfig, "eval_backend"): one_of("evaluation backend", SIM_BACKENDS),
     (TrainConfig, "checkpoint_freq"): at_least(0),
     (TrainConfig, "backend"): one_of("training backend", TRAIN_BACKENDS),
 }

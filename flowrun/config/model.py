@@ -41,6 +41,9 @@ class TrainConfig:
         normalize: wrap the envs in ``VecNormalize``.
         eval_freq: evaluate every this many environment steps (0 = never during training).
         eval_episodes: episodes per evaluation and in the final evaluation.
+        eval_backend: where the periodic evaluation runs its episodes: ``sumo`` (default) or
+            ``numpy`` (single-lane rings only: the numpy backend's rings, which equal SUMO's to
+            1e-9 m/s, all episodes stepped together; ~1 % of the cost).
         checkpoint_freq: save a checkpoint every this many environment steps (0 = never).
         backend: ``sb3`` (stable-baselines3, default) or ``rllib`` (Ray RLlib).
         num_env_runners: RLlib only: env runners (one process and one SUMO each); ``None``
@@ -62,6 +65,7 @@ class TrainConfig:
     normalize: bool = False
     eval_freq: int = 0
     eval_episodes: int = 1
+    eval_backend: str = "sumo"
     checkpoint_freq: int = 0
     backend: str = "sb3"
     num_env_runners: int | None = None

@@ -66,6 +66,23 @@ def preflight(cfg: ExperimentConfig, loc: Locations) -> None:
         _check_rl_vehicles(cfg, cls, loc)
         _check_hyperparam_names(cfg, loc)
         _check_rllib(cfg, loc)
+        _check_numpy_backends(cfg, loc)
+
+
+def _check_numpy_backends(cfg: ExperimentConfig, loc: Locations) -> None:
+    """``sim.backend: numpy`` and ``train.eval_backend: numpy`` on a config the numpy rings
+    cannot run (what ``train`` checks before it starts)."""
+    checks = [("flowrun.fastring.plan", "check_numpy_backend")]
+    if cfg.train is not None and cfg.train.eval_backend == "numpy" and cfg.train.eval_freq > 0:
+        checks.append(("flowrun.training.numpy_eval", "numpy_eval_plan"))
+    for module, name in checks:
+        check = optional(module, name)
+        if check is None:
+            continue
+        try:
+            check(cfg)
+        except ConfigError as err:
+            raise _relocated(err, loc) from None
 
 
 def _check_rllib(cfg: ExperimentConfig, loc: Locations) -> None:

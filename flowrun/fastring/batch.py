@@ -326,13 +326,22 @@ class EpisodeStart:
 
 
 def draw_episode(
-    plan: RingPlan, rng: np.random.Generator, cache: dict[int, Network]
+    plan: RingPlan,
+    rng: np.random.Generator,
+    cache: dict[float, Network],
+    length: float | None = None,
 ) -> EpisodeStart:
     """Ring length, placement and the controller-noise seed, drawn from ``rng`` in the SUMO
-    env's order (``episode_network``, ``start_positions``, SUMO's seed, noise seed, routes)."""
+    env's order (``episode_network``, ``start_positions``, SUMO's seed, noise seed, routes).
+
+    ``length`` (m) sets the ring's length as the SUMO env's ``reset(options={"ring_length":
+    L})`` does: the length is still drawn first, so every other draw is the same.
+    """
     network = plan.network
-    if plan.bounds is not None:
-        length = int(rng.integers(plan.bounds[0], plan.bounds[1] + 1))
+    drawn = None if plan.bounds is None else int(rng.integers(plan.bounds[0], plan.bounds[1] + 1))
+    if length is None:
+        length = drawn
+    if length is not None:
         if length not in cache:
             cache[length] = plan.network.with_params(length=length)
         network = cache[length]

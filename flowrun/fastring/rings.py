@@ -44,7 +44,7 @@ class FastRings:
         self.physics = RingPhysics(plan)
         self.noise = NoiseStreams(plan.num_noisy, num_rings)
         self.rngs: list[np.random.Generator | None] = [None] * num_rings
-        self._networks: dict[int, Network] = {}
+        self._networks: dict[float, Network] = {}
         self.state: RingState | None = None
         self.episode_steps = np.zeros(num_rings, dtype=np.int64)
         self.collisions = np.zeros(num_rings, dtype=np.int64)
@@ -52,19 +52,29 @@ class FastRings:
         #: (warm-up included) and at the start of an episode (a log's frames)
         self.observer: Callable[[RingState, BoolArray], None] | None = None
 
-    def reset(self, cols: Sequence[int] | IntArray, seeds: Sequence[int | None]) -> None:
+    def reset(
+        self,
+        cols: Sequence[int] | IntArray,
+        seeds: Sequence[int | None],
+        lengths: Sequence[float | None] | None = None,
+    ) -> None:
         """Start new episodes on the rings ``cols`` (``seeds[i]`` reseeds ring ``cols[i]``;
-        ``None`` continues its generator, or seeds it with ``sim.seed`` the first time)."""
+        ``None`` continues its generator, or seeds it with ``sim.seed`` the first time).
+        ``lengths[i]`` (m) sets ring ``cols[i]``'s length as the SUMO env's
+        ``reset(options={"ring_length": L})`` does (``None``: the drawn length)."""
         cols = np.asarray(cols, dtype=np.int64)
+        chosen = [None] * cols.size if lengths is None else list(lengths)
         episodes = []
-        for col, seed in zip(cols.tolist(), seeds, strict=True):
+        for col, seed, length in zip(cols.tolist(), seeds, chosen, strict=True):
             if seed is None and self.rngs[col] is None:
                 seed = int(self.plan.cfg.sim.seed or 0)
             if seed is not None:
                 self.rngs[col] = new_generator(int(seed))
             rng = self.rngs[col]
             assert rng is not None
-            episode = draw_episode(self.plan, rng, self._networks)
+            episode = draw_episode(
+                self.plan, rng, self._networks, None if length is None else float(length)
+            )
             self.noise.restart(col, episode.noise_seed)
             episodes.append(episode)
         part = fresh_state(self.plan, episodes)

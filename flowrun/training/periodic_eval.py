@@ -23,7 +23,7 @@ import zipfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -41,7 +41,7 @@ log = logging.getLogger(__name__)
 
 EVAL_LOG = "eval_log"
 EVALUATIONS = "evaluations.npz"
-# obs (1-D, already normalised) -> action
+# obs (1-D, already normalised) -> action; a batch of observations (rows) -> actions (rows)
 Act = Callable[[np.ndarray], np.ndarray]
 
 
@@ -80,7 +80,7 @@ def numpy_policy(policy: Any) -> Act | None:
     high = np.asarray(policy.action_space.high, dtype=np.float64)
 
     def act(obs: np.ndarray) -> np.ndarray:
-        x = np.asarray(obs, dtype=np.float64).reshape(-1)
+        x = np.asarray(obs, dtype=np.float64)  # one observation, or a batch (rows)
         for kind, weight, bias in layers:
             if kind == "linear":
                 x = x @ weight + bias  # type: ignore[operator]
@@ -122,6 +122,22 @@ class EpisodeScore:
     episode_return: float
     length: int
     last_half_speed: float
+
+
+class Episodes(Protocol):
+    """The evaluation episodes of a run: :class:`EpisodeRunner` (SUMO) or
+    :class:`~flowrun.training.numpy_eval.NumpyEpisodeRunner`."""
+
+    def score(self, scores: Sequence[EpisodeScore]) -> float:
+        """The number that ranks a policy (higher is better)."""
+
+    def run(
+        self, act: Act, normalize: Callable[[np.ndarray], np.ndarray] | None
+    ) -> list[EpisodeScore] | None:
+        """One episode per seed with the policy; ``None`` when asked to stop."""
+
+    def close(self) -> None:
+        """Release the simulation (idempotent)."""
 
 
 class EpisodeRunner:
@@ -174,10 +190,7 @@ class EpisodeRunner:
         alike, and a policy must be good on every one of them: the mean let a policy that
         stops the AV on short rings win on its long ones). The mean return when the env
         reports no speeds."""
-        ratios = [s.last_half_speed / b for s, b in zip(scores, self.baseline, strict=True)]
-        if all(math.isfinite(r) for r in ratios) and all(b > 0 for b in self.baseline):
-            return float(min(ratios))
-        return float(np.mean([s.episode_return for s in scores]))
+        return relative_worst(scores, self.baseline)
 
     def run(
         self, act: Act, normalize: Callable[[np.ndarray], np.ndarray] | None
@@ -197,6 +210,15 @@ class EpisodeRunner:
     def close(self) -> None:
         """Stop the env's simulation (idempotent)."""
         self.env.close()
+
+
+def relative_worst(scores: Sequence[EpisodeScore], baseline: Sequence[float]) -> float:
+    """The worst episode's last-half mean speed over the baseline's on the same seed (the
+    mean return when the speeds or the baseline are not known)."""
+    ratios = [s.last_half_speed / b for s, b in zip(scores, baseline, strict=True)]
+    if all(math.isfinite(r) for r in ratios) and all(b > 0 for b in baseline):
+        return float(min(ratios))
+    return float(np.mean([s.episode_return for s in scores]))
 
 
 def play_episode(
@@ -300,7 +322,7 @@ class EvalHistory:
 
 
 def make_periodic_eval_callback(
-    runner: EpisodeRunner,
+    runner: Episodes,
     run_dir: Path,
     eval_freq: int,
     best_model: str,

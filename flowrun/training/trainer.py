@@ -33,7 +33,8 @@ from flowrun.training.callbacks import (
     save_model,
 )
 from flowrun.training.deps import require
-from flowrun.training.periodic_eval import EpisodeRunner, make_periodic_eval_callback
+from flowrun.training.numpy_eval import NumpyEpisodeRunner, numpy_eval_plan
+from flowrun.training.periodic_eval import EpisodeRunner, Episodes, make_periodic_eval_callback
 from flowrun.training.resume import (
     keep_monitor_files,
     note_resume,
@@ -139,6 +140,8 @@ def train(
     build_hyperparams(tc.algorithm, tc.hyperparams)  # report a typo before any work
     env_class(cfg)  # a wrong env.class or missing additional_params, also before any work
     check_numpy_backend(cfg)  # sim.backend numpy: a config it cannot run, before any work
+    if tc.eval_backend == "numpy" and tc.eval_freq > 0:
+        numpy_eval_plan(cfg)  # likewise for the periodic evaluation's episodes
     state: dict[str, Any] | None = None
     if resume_dir is not None:
         run_dir = resume_dir
@@ -154,7 +157,7 @@ def train(
     stop = should_stop or _never
     status, done, error, exit_code = "failed", resumed_from, "", 1
     venv: VecEnv | None = None
-    runner: EpisodeRunner | None = None
+    runner: Episodes | None = None
     model: BaseAlgorithm | None = None
     try:
         _write_train_metrics(run_dir, cfg, tc, seed, "running", done, timing, state)
@@ -295,14 +298,17 @@ def _training_env(
 
 def _eval_runner(
     cfg: ExperimentConfig, tc: TrainConfig, seed: int, stop: StopRequested
-) -> EpisodeRunner:
-    """The episodes that pick ``best_model.zip``, run in this process.
+) -> Episodes:
+    """The episodes that pick ``best_model.zip``, run in this process (on SUMO, or on the
+    numpy rings with ``train.eval_backend: numpy``).
 
     Evaluation-mode rewards (Flow's ``env.evaluate``: the mean speed for the ring envs) and
     the same ``eval_episodes`` reset seeds at every evaluation, so scores are comparable.
     """
-    eval_cfg = replace(cfg, env=replace(cfg.env, evaluate=True))
     seeds = [seed + 10_000 + i for i in range(tc.eval_episodes)]
+    if tc.eval_backend == "numpy":
+        return NumpyEpisodeRunner(cfg, seeds, stop)
+    eval_cfg = replace(cfg, env=replace(cfg.env, evaluate=True))
     return EpisodeRunner(eval_cfg, seeds, stop)
 
 
@@ -339,7 +345,7 @@ def _model(
     return model
 
 
-def _close(*envs: VecEnv | EpisodeRunner | None) -> None:
+def _close(*envs: VecEnv | Episodes | None) -> None:
     for env in envs:
         if env is None:
             continue

@@ -72,6 +72,14 @@ def ring_bounds(additional_params: dict[str, Any]) -> tuple[int, int] | None:
     return int(low), int(high)
 
 
+def spread_lengths(bounds: tuple[int, int], episodes: int) -> list[int]:
+    """Ring lengths (m) spreading ``episodes`` evaluation episodes evenly over ``bounds``:
+    the midpoints of ``episodes`` equal slices, rounded half up to whole metres (228, 245 and
+    262 m for 3 episodes over [220, 270])."""
+    low, high = bounds
+    return [int(low + (high - low) * (i + 0.5) / episodes + 0.5) for i in range(episodes)]
+
+
 class WaveAttenuationEnv(RingAccelBase):
     """Fully observed ring with a redrawn length (Flow's ``WaveAttenuationEnv``).
 
@@ -116,11 +124,7 @@ class WaveAttenuationEnv(RingAccelBase):
         bounds = self.ring_range()
         if bounds is None:
             return [{} for _ in range(episodes)]
-        low, high = bounds
-        return [
-            {"ring_length": int(low + (high - low) * (i + 0.5) / episodes + 0.5)}
-            for i in range(episodes)
-        ]
+        return [{"ring_length": length} for length in spread_lengths(bounds, episodes)]
 
     def episode_network(self) -> Network:
         """The ring with a length drawn uniformly from the integers in ``ring_length`` (or the

@@ -1,0 +1,138 @@
+"""Evaluation during training on the numpy ring backend (``train.eval_backend: numpy``).
+
+The same episodes as :class:`~flowrun.training.periodic_eval.EpisodeRunner` plays on SUMO —
+same reset seeds, same ring lengths (the env's ``evaluation_options``), evaluation-mode
+rewards, the all-human baseline — but every episode of an evaluation is one ring of a
+:class:`~flowrun.fastring.rings.FastRings` batch, stepped together with the policy applied to
+all rings at once. The numpy rings equal SUMO's to 1e-9 m/s (``tests/test_fastring_sumo.py``),
+so the scores that pick ``best_model.zip`` are SUMO's up to rounding, for ~1 % of the cost.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from flowrun.config.model import ExperimentConfig
+from flowrun.errors import ConfigError
+from flowrun.fastring.plan import RingPlan, ring_plan
+from flowrun.fastring.rings import FastRings
+from flowrun.fastring.tasks import RingTask
+from flowrun.training.periodic_eval import Act, EpisodeScore, relative_worst
+
+EVAL_BACKEND_PATH = "train.eval_backend"
+
+
+def numpy_eval_plan(cfg: ExperimentConfig) -> RingPlan:
+    """The numpy backend's plan of ``cfg``'s evaluation episodes (evaluate mode).
+
+    Raises:
+        ConfigError: at ``train.eval_backend`` when the numpy backend cannot run ``cfg``.
+    """
+    eval_cfg = replace(cfg, env=replace(cfg.env, evaluate=True))
+    try:
+        return ring_plan(replace(eval_cfg, sim=replace(cfg.sim, backend="numpy")))
+    except ConfigError as err:
+        what = err.message.removeprefix("sim.backend numpy ").split("; use ")[0]
+        where = f" ({err.path})" if err.path else ""
+        raise ConfigError(
+            f"the numpy evaluation backend {what}{where}; use train.eval_backend: sumo "
+            "for this config",
+            EVAL_BACKEND_PATH,
+            cfg.source or "",
+        ) from None
+
+
+class NumpyEpisodeRunner:
+    """:class:`~flowrun.training.periodic_eval.EpisodeRunner`'s episodes on numpy rings."""
+
+    def __init__(
+        self,
+        cfg: ExperimentConfig,
+        seeds: Sequence[int],
+        should_stop: Callable[[], bool] | None = None,
+    ) -> None:
+        """Plan ``cfg`` (evaluation mode is set here) and run the all-human baseline.
+
+        Args:
+            cfg: the training config.
+            seeds: one episode per seed, at every evaluation.
+            should_stop: polled every step; once true, :meth:`run` gives up.
+        """
+        from flowrun.envs.factory import env_class
+        from flowrun.envs.ring.wave_attenuation import spread_lengths
+        from flowrun.training.evaluate import all_human
+
+        self.seeds = tuple(seeds)
+        self.should_stop = should_stop
+        self.plan = numpy_eval_plan(cfg)
+        spread = hasattr(env_class(cfg), "evaluation_options") and self.plan.bounds is not None
+        self.lengths: list[float | None] = (
+            [float(x) for x in spread_lengths(self.plan.bounds, len(self.seeds))]
+            if spread and self.plan.bounds is not None
+            else [None] * len(self.seeds)
+        )
+        try:
+            human = numpy_eval_plan(all_human(cfg))
+        except ConfigError:  # no human group to copy: scores fall back to returns
+            self.baseline = [math.nan] * len(self.seeds)
+        else:
+            runs = self._play(human, None, None)
+            self.baseline = [math.nan if runs is None else r.last_half_speed for r in runs or []]
+
+    def score(self, scores: Sequence[EpisodeScore]) -> float:
+        """As :meth:`EpisodeRunner.score`."""
+        return relative_worst(scores, self.baseline)
+
+    def run(
+        self, act: Act, normalize: Callable[[np.ndarray], np.ndarray] | None
+    ) -> list[EpisodeScore] | None:
+        """Every seed's episode with the policy (``act`` takes a batch of observations);
+        ``None`` when ``should_stop`` became true on the way."""
+        return self._play(self.plan, act, normalize)
+
+    def _play(
+        self,
+        plan: RingPlan,
+        act: Act | None,
+        normalize: Callable[[np.ndarray], np.ndarray] | None,
+    ) -> list[EpisodeScore] | None:
+        b = len(self.seeds)
+        rings, task = FastRings(plan, b), RingTask(plan)
+        rings.reset(np.arange(b), list(self.seeds), self.lengths)
+        obs = task.observe(rings)
+        alive = np.ones(b, dtype=bool)
+        steps = np.zeros(b, dtype=np.int64)
+        total = np.zeros(b)
+        speeds = np.empty((plan.horizon, b))
+        for t in range(plan.horizon):
+            if self.should_stop is not None and self.should_stop():
+                return None
+            if act is None:
+                actions = np.zeros((b, 0))
+            else:
+                actions = act(normalize(obs) if normalize is not None else obs)
+            applied = task.clip(actions)
+            crashed = rings.step(applied)
+            rewards = task.rewards(rings, applied, crashed)
+            state = rings.state
+            assert state is not None
+            speeds[t] = state.speed.mean(axis=0)
+            total += np.where(alive, rewards, 0.0)
+            steps += alive
+            alive &= ~crashed  # a collision ends that ring's episode
+            if not alive.any():
+                break
+            obs = task.observe(rings)
+        scores = []
+        for i in range(b):
+            n = int(steps[i])
+            half = speeds[n // 2 : n, i]
+            scores.append(EpisodeScore(float(total[i]), n, float(np.mean(half))))
+        return scores
+
+    def close(self) -> None:
+        """Nothing to release (no simulator)."""
