@@ -122,6 +122,8 @@ def test_numpy_policy_matches_sb3_predict() -> None:
                 expected, _ = model.predict(o, deterministic=True)
                 np.testing.assert_allclose(act(o), expected, atol=1e-5)
             assert any(abs(float(act(o)[0])) < 1 for o in obs)  # not all clipped to the bounds
+            # a batch of observations (the numpy evaluation's rings) gives each row's action
+            np.testing.assert_allclose(act(obs), np.stack([act(o) for o in obs]), atol=1e-6)
         sac_cls: Any = algorithm_class("SAC")
         sac = sac_cls("MlpPolicy", env, seed=1, device="cpu")
         assert numpy_policy(sac.policy) is None  # SB3's predict is used for other policies
