@@ -15,6 +15,7 @@ from gymnasium.utils.env_checker import check_env
 
 from flowrun.config.loader import load_config, override_config
 from flowrun.config.params import InitialConfig, NetParams, VehicleParams
+from flowrun.config.vtype import vtype_attributes
 from flowrun.envs import (
     BottleneckAccelEnv,
     BottleneckDesiredVelocityEnv,
@@ -90,6 +91,25 @@ def test_flow_names_and_bad_parameters() -> None:
     assert bottleneck_edge_starts((0.1, 0.1, 40.0, 40.0))["5"] == pytest.approx(
         100 + 310 + 140 + 280 + 80.2
     )
+
+
+#: Flow's SumoCarFollowingParams() of its last version (flow/core/params.py), which none of
+#: Flow's bottleneck set-ups changes beyond the speed mode (flowrun's own defaults differ)
+FLOW_DEFAULT_VTYPE = {"accel": 2.6, "decel": 4.5, "sigma": 0.5, "tau": 1.0, "minGap": 2.5,
+                      "maxSpeed": 30.0, "speedFactor": 1.0, "speedDev": 0.1,
+                      "impatience": 0.5}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", ["bottleneck", "bottleneck_desired_velocity",
+                                  "benchmarks/bottleneck0", "benchmarks/bottleneck1",
+                                  "benchmarks/bottleneck2"])  # fmt: skip
+def test_bottleneck_cars_get_flows_default_vehicle_type(name: str) -> None:
+    groups = load_config(CONFIGS / f"{name}.yaml").vehicles.groups
+    assert [g.veh_id for g in groups] in (["human"], ["human", "rl"])
+    for g in groups:
+        attrs = vtype_attributes(g.car_following_params, g.lane_change_params)
+        assert {k: float(attrs[k]) for k in FLOW_DEFAULT_VTYPE} == FLOW_DEFAULT_VTYPE, g.veh_id
+        assert (attrs["carFollowModel"], attrs["laneChangeModel"]) == ("IDM", "LC2013")
 
 
 def outflow(inflow: float, seconds: float = 400.0, window: float = 200.0) -> float:
