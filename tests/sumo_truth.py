@@ -26,7 +26,8 @@ def compare_leaders_with_sumo(env: Any, steps: int) -> tuple[int, int]:
             ours = vk.get_leader(vid)
             if not found or not found[0]:
                 assert ours is None, vid
-                assert vk.get_headway(vid) == math.inf
+                assert vk.get_headway(vid) == 1000.0  # Flow's value
+                assert vk.headway[vk.table.row(vid)] == math.inf  # what controllers read
                 continue
             assert ours == found[0], vid
             gap = found[1] + v.getMinGap(vid)

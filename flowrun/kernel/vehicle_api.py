@@ -15,7 +15,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from flowrun.kernel.lane_neighbours import LaneGraphView, LaneNeighbours, lane_neighbours
+from flowrun.kernel.lane_neighbours import (
+    NO_NEIGHBOUR_GAP,
+    LaneGraphView,
+    LaneNeighbours,
+    lane_neighbours,
+)
 
 if TYPE_CHECKING:
     from flowrun.kernel.population import Population, VehicleTable
@@ -281,8 +286,15 @@ class FlowVehicleGetters:
         return int(self.lanes[self.table.row(veh_id)])
 
     def get_headway(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
-        """Bumper-to-bumper gap to the leader, m (``inf`` without leader)."""
-        return self._get(self.headway, veh_id, error)
+        """Bumper-to-bumper gap to the leader, m: Flow's 1000 without a leader.
+
+        The kernel's own :attr:`headway` array keeps ``inf`` there: the vectorised
+        controllers read that as "no leader", as Flow's test the leader id.
+        """
+        h = self._get(self.headway, veh_id, error)
+        if isinstance(h, list):
+            return [NO_NEIGHBOUR_GAP if x == math.inf else x for x in h]
+        return NO_NEIGHBOUR_GAP if h == math.inf else h
 
     def get_tailway(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
         """Gap from the follower's front bumper to this car's rear bumper, m."""
