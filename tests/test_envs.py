@@ -125,7 +125,7 @@ def test_make_with_defaults_is_the_stabilizing_the_ring_task():
         assert inner.initial_vehicles.num_rl_vehicles == 1
         obs, info = env.reset(seed=0)
         assert obs.shape == (3,) and obs.dtype == np.float32
-        assert info["time"] == pytest.approx(75.1)  # insertion step + 750 warm-up steps
+        assert info["time"] == pytest.approx(75.2)  # Flow's start + insertion steps + 750 warm-up
         assert env.render() is None  # no render_mode asked
     finally:
         env.close()
@@ -324,7 +324,7 @@ def test_info_reports_speed_time_and_reward_terms(po_env):
     assert info["mean_speed"] == pytest.approx(
         np.mean([libsumo.vehicle.getSpeed(v) for v in po_env.k.vehicle.get_ids()])
     )
-    assert info["time"] == pytest.approx(0.2)
+    assert info["time"] == pytest.approx(0.3)  # Flow's start + insertion steps + 1
 
 
 def test_sims_per_step_holds_the_action_over_several_simulation_steps():
@@ -332,7 +332,7 @@ def test_sims_per_step_holds_the_action_over_several_simulation_steps():
     try:
         env.reset(seed=0)
         env.step(np.array([1.0], dtype=np.float32))
-        assert env.k.simulation.time == pytest.approx(0.6)  # insertion + 5 steps
+        assert env.k.simulation.time == pytest.approx(0.7)  # start + insertion + 5 steps
         assert env.k.vehicle.get_speed("rl_0") == pytest.approx(0.5, abs=1e-9)
     finally:
         env.close()
@@ -348,7 +348,7 @@ def test_a_second_env_stops_the_first_and_the_first_asks_for_reset(caplog):
             first.step(np.zeros(1, dtype=np.float32))
         first.reset(seed=0)  # takes the simulation back
         _, _, terminated, _, info = first.step(np.zeros(1, dtype=np.float32))
-        assert not terminated and info["time"] == pytest.approx(0.2)
+        assert not terminated and info["time"] == pytest.approx(0.3)
         with pytest.raises(gymnasium.error.ResetNeeded):
             second.step(np.zeros(1, dtype=np.float32))
     finally:
@@ -361,7 +361,7 @@ def test_warmup_runs_before_the_first_observation():
     env = make("WaveAttenuationPOEnv", warmup_steps=100)
     try:
         obs, info = env.reset(seed=0)
-        assert info["time"] == pytest.approx(10.1)
+        assert info["time"] == pytest.approx(10.2)
         assert obs[0] * 15 == pytest.approx(libsumo.vehicle.getSpeed("rl_0"), abs=1e-5)
         assert not math.isclose(float(obs[0]), 0.0)
     finally:

@@ -108,13 +108,13 @@ def test_parallel_api_test_passes(spec: tuple[str, ...], action_seed: int, tmp_p
 
 @pytest.mark.parametrize(
     ("spec", "horizon", "newcomer"),
-    [(MERGE, 15, "flow_1.1"), (("highway",), 22, "flow_1.1")],
+    [(MERGE, 15, "flow_1.1"), (("highway",), 21, "flow_1.1")],
     ids=["merge", "highway"],
 )
 def test_an_av_entering_in_the_last_step_is_not_reported(
     spec: tuple[str, ...], horizon: int, newcomer: str, tmp_path: Path
 ) -> None:
-    # with SUMO driving the AVs, ``newcomer`` enters in step ``horizon`` (15 and 22): the step
+    # with SUMO driving the AVs, ``newcomer`` enters in step ``horizon`` (15 and 21): the step
     # ending the episode keys its dicts by the agents live before it only, as PettingZoo's
     # API test expects (the car never was in ``agents``); the same holds for a collision step
     with env_of(*spec, f"env.horizon={horizon}", tmp=tmp_path) as env:

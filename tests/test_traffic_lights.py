@@ -222,7 +222,8 @@ def test_no_car_crosses_on_red_and_cars_are_conserved() -> None:
         env.reset(seed=0)
         k, vk = env.k.traffic_light, env.k.vehicle
         api = vk.api
-        departed = arrived = 0
+        # 1 s steps: the inflows' first cars (begin 1 s) enter in reset's step, as in Flow
+        departed, arrived = vk.num_vehicles, 0
         crossed = 0
         prev_edge: dict[str, str] = {}
         prev_state = {t: k.get_state(t) for t in k.get_ids()}

@@ -241,7 +241,7 @@ def test_experiment_runs_1500_steps_despite_infinite_horizon(tutorial_run):
     assert env.env_params.horizon == float("inf")
     assert len(result["per_step_returns"]) == 1
     assert len(result["per_step_returns"][0]) == 1500
-    assert env.k.simulation.time == pytest.approx(150.1)  # insertion step + 1500 steps
+    assert env.k.simulation.time == pytest.approx(150.2)  # start + insertion + 1500 steps
     assert result["returns"][0] == pytest.approx(sum(result["per_step_returns"][0]))
 
 

@@ -246,7 +246,7 @@ class RingPhysics:
         nxt = np.empty_like(v)
         limits = self._limits(b)
         k = 0
-        time = float(s.steps[0] + 1) * dt if b else 0.0  # SUMO's clock (of the first ring)
+        time = float(s.steps[0] + 2) * dt if b else 0.0  # SUMO's clock (start + insertion steps)
         for g, (max_accel, max_decel, length, speed_limit) in zip(self.humans, limits, strict=True):
             sl = slice(g.start, g.stop)
             n = g.stop - g.start

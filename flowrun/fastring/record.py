@@ -67,7 +67,7 @@ class _FrameWriter:
         prev = speed if self.prev is None else self.prev
         leader = state.leader[:, 0]
         frame = VehicleFrame(
-            step=self.step, time=(self.step + 1) * self.dt, ids=self.ids, types=self.types,
+            step=self.step, time=(self.step + 2) * self.dt, ids=self.ids, types=self.types,
             edges=[self.edges[i] for i in idx.tolist()], lanes=np.zeros(speed.size, np.int64),
             lane_pos=position - idx * edge_len, position=position, odometer=state.odo[:, 0].copy(),
             x=radius * np.cos(angle), y=radius * np.sin(angle), speed=speed, accel_cmd=cmd,

@@ -68,6 +68,8 @@ class Kernel:
         """(Re)start SUMO on ``network`` with the vehicles of ``table`` at their start positions.
 
         Restarting libsumo costs a few milliseconds and reproduces a fresh start exactly.
+        As in Flow, one step runs on the empty network before the cars are inserted, and the
+        insertion takes another: the clock reads ``2 * sim_step`` afterwards.
 
         Raises:
             SimulationError: SUMO failed, or not every vehicle could be inserted.
@@ -86,6 +88,10 @@ class Kernel:
         )
         api = self.process.start()
         try:
+            # Flow's start_simulation steps SUMO once on the empty network before its reset
+            # inserts the cars (and restart_instance repeats both), so after reset the clock
+            # reads 2 steps, as Flow's: signal programs and inflows keep Flow's phase.
+            api.simulationStep()
             self._insert(api, table)
         except Exception:
             self.close()

@@ -445,8 +445,15 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
     def _follow_population(self, first: bool) -> None:
         """Add the cars SUMO inserted, drop those that arrived (or were removed)."""
         fast, pop = self._fast, self.table
-        departed = [] if first else list(fast.departed_ids())
-        arrived = [] if first else list(fast.arrived_ids())
+        if first:
+            # Flow's reset counts no departure, but a car an inflow inserted in the insertion
+            # step (1 s steps, inflows from 1 s) is on the road: it joins, as in Flow's update
+            entered = [vid for vid in fast.departed_ids() if vid not in pop]
+            departed: list[str] = []
+            arrived: list[str] = []
+        else:
+            entered = departed = list(fast.departed_ids())
+            arrived = list(fast.arrived_ids())
         arrived += self._pending_removal
         self._pending_removal = []
         if self._resync:  # teleports can take cars off the road: ask SUMO who is there
@@ -454,19 +461,19 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             now = self.api.vehicle.getIDList()
             present = set(now)
             arrived = [v for v in pop.ids if v not in present]
-            departed = [v for v in now if v not in pop]
+            entered = departed = [v for v in now if v not in pop]
         self.departed_ids, self.arrived_ids = departed, arrived
         self._flow_counts.append((len(departed), len(arrived)))
-        if not departed and not arrived and self._version == pop.version:
+        if not entered and not arrived and self._version == pop.version:
             return
         v = self.api.vehicle
-        groups = [pop.class_index(v.getTypeID(vid)) for vid in departed]
+        groups = [pop.class_index(v.getTypeID(vid)) for vid in entered]
         old_route_end = self._route_end
         old_prev = self.speed
-        src = pop.change(arrived, departed, groups)
+        src = pop.change(arrived, entered, groups)
         for vid in arrived:
             self._route_of.pop(vid, None)
-        for vid, g in zip(departed, groups, strict=True):
+        for vid, g in zip(entered, groups, strict=True):
             if g != pop.foreign:  # Flow's modes hold from a car's first step
                 c = pop.classes[g]
                 v.setSpeedMode(vid, c.speed_mode)
