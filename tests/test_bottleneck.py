@@ -58,6 +58,11 @@ def test_lanes_drop_4s_2s_1s_through_zipper_merges(tmp_path: Path, scaling: int)
     }  # fmt: skip
     lengths = {k: float(v[0].get("length", "nan")) for k, v in edges.items()}
     assert lengths == pytest.approx({"1": 100, "2": 310, "3": 140, "4": 280, "5": 155})
+    # lanes centred on the road's line (Flow's spreadType "center"): each merge is symmetric
+    lane_y = {k: [float(lane.get("shape", "").split()[0].split(",")[1]) for lane in v]
+              for k, v in edges.items()}  # fmt: skip
+    assert {k: sum(y) for k, y in lane_y.items()} == pytest.approx(dict.fromkeys(edges, 0.0))
+    assert max(lane_y["3"]) == pytest.approx(1.6 * 4 * scaling - 1.6)  # 3.2 m lanes
     kinds = {j.get("id"): j.get("type") for j in root.iter("junction")}
     assert kinds["4"] == kinds["5"] == "zipper"
     links = {(c.get("from"), c.get("fromLane"), c.get("to"), c.get("toLane"))

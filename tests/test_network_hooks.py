@@ -106,3 +106,23 @@ def test_a_route_through_an_unknown_edge_is_refused() -> None:
 
     with pytest.raises(ConfigError, match=r"no edge 'edge9' in Bad\.specify_routes"):
         env_on(Bad)
+
+
+def test_an_edges_spread_type_is_kept_and_an_unknown_one_refused() -> None:
+    class Centred(MyRing):
+        def specify_edges(self, net_params: NetParams) -> list[dict[str, Any]]:
+            return [{**e, "spreadType": "center"} for e in super().specify_edges(net_params)]
+
+    env = env_on(Centred)
+    try:
+        assert {e.spread_type for e in env.network.spec.edges} == {"center"}
+        assert {e["spreadType"] for e in env.network.edges} == {"center"}  # Flow's view
+    finally:
+        env.close()
+
+    class Bad(MyRing):
+        def specify_edges(self, net_params: NetParams) -> list[dict[str, Any]]:
+            return [{**e, "spreadType": "centre"} for e in super().specify_edges(net_params)]
+
+    with pytest.raises(ConfigError, match=r"spreadType 'centre' \(did you mean 'center'\?\)"):
+        env_on(Bad)

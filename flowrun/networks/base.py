@@ -48,6 +48,8 @@ class Edge:
         speed: speed limit, m/s.
         shape: polyline (x, y) points, metres.
         priority: SUMO edge priority (decides right of way at priority junctions).
+        spread_type: SUMO ``spreadType``: ``right`` (lanes to the right of the edge's line,
+            netconvert's default) or ``center`` / ``roadCenter`` (lanes centred on it).
     """
 
     id: str
@@ -58,6 +60,7 @@ class Edge:
     speed: float
     shape: tuple[tuple[float, float], ...] = ()
     priority: int = 78
+    spread_type: str = "right"
 
 
 @dataclass(frozen=True)

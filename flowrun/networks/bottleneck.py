@@ -2,7 +2,8 @@
 
 Five straight edges along the x axis, named as in Flow: ``1`` (100 m) -> ``2`` (310 m) ->
 ``3`` (140 m), each ``4 * scaling`` lanes wide, then ``4`` (280 m, ``2 * scaling`` lanes) and
-``5`` (155 m, ``scaling`` lanes). Nodes ``1`` .. ``6`` sit at Flow's x = 0, 100, 410, 550, 830,
+``5`` (155 m, ``scaling`` lanes), their lanes centred on the road's line (Flow's
+``spreadType: center``). Nodes ``1`` .. ``6`` sit at Flow's x = 0, 100, 410, 550, 830,
 985 m; ``4`` and ``5`` are SUMO *zipper* junctions (radius 20 m), where lane ``i`` of the wider
 edge feeds lane ``floor(i / 2)`` of the narrower one, so two lanes merge alternately into
 one. Cars enter on ``1`` from inflows; every start edge routes to the end of ``5``. A node
@@ -51,9 +52,9 @@ MAIN_ROUTE = tuple(e[0] for e in EDGES)
 PLAIN_LINK = 0.1
 #: length of the links through a zipper node by the number of lanes that merge there, m
 #: (SUMO 1.28 builds every lane's link through it this long; measured, see the tests)
-ZIPPER_LINKS: dict[int, float] = {2: 40.063898, 4: 40.216003, 6: 40.489036, 8: 40.896360,
-                                  10: 41.388543, 12: 41.966878, 16: 43.379084,
-                                  20: 45.090679}  # fmt: skip
+ZIPPER_LINKS: dict[int, float] = {2: 40.031987, 4: 40.063898, 6: 40.140779, 8: 40.231766,
+                                  10: 40.374476, 12: 40.517061, 16: 40.903515,
+                                  20: 41.388543}  # fmt: skip
 
 
 def zipper_link(lanes_in: int) -> float:
@@ -82,7 +83,8 @@ def bottleneck_spec(
         for i, x, kind, radius in NODES
     )
     edges = tuple(
-        Edge(eid, a, b, length, lanes * scaling, speed_limit) for eid, a, b, length, lanes in EDGES
+        Edge(eid, a, b, length, lanes * scaling, speed_limit, spread_type="center")
+        for eid, a, b, length, lanes in EDGES
     )
     connections = tuple(
         Connection(a.id, b.id, i, i // 2)

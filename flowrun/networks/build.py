@@ -50,10 +50,11 @@ def edges_xml(spec: NetworkSpec) -> str:
     for e in spec.edges:
         shape = " ".join(f"{x:.6f},{y:.6f}" for x, y in e.shape)
         shape_attr = f' shape="{shape}"' if shape else ""
+        spread = "" if e.spread_type == "right" else f" spreadType={quoteattr(e.spread_type)}"
         rows.append(
             f"    <edge id={quoteattr(e.id)} from={quoteattr(e.from_node)} "
             f'to={quoteattr(e.to_node)} numLanes="{e.lanes}" speed="{e.speed:.6f}" '
-            f'length="{e.length:.9f}" priority="{e.priority}"{shape_attr}/>'
+            f'length="{e.length:.9f}" priority="{e.priority}"{shape_attr}{spread}/>'
         )
     return "<edges>\n" + "\n".join(rows) + "\n</edges>\n"
 

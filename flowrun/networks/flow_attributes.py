@@ -39,7 +39,8 @@ class FlowAttributes:
 
     @_view
     def edges(self) -> list[dict[str, Any]]:
-        """Flow's ``edges``: ``[{id, from, to, length, numLanes, speed, priority[, shape]}]``."""
+        """Flow's ``edges``: ``[{id, from, to, length, numLanes, speed, priority[, shape]
+        [, spreadType]}]``."""
         out = []
         for e in self.spec.edges:
             edge: dict[str, Any] = {
@@ -48,6 +49,8 @@ class FlowAttributes:
             }  # fmt: skip
             if e.shape:
                 edge["shape"] = list(e.shape)
+            if e.spread_type != "right":
+                edge["spreadType"] = e.spread_type
             out.append(edge)
         return out
 

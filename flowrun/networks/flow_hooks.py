@@ -21,6 +21,9 @@ from flowrun.networks.base import Connection, Edge, NetworkSpec, Node
 from flowrun.networks.template import parse_routes
 from flowrun.suggest import did_you_mean
 
+#: SUMO's edge ``spreadType`` values (where an edge's lanes lie relative to its line)
+SPREAD_TYPES = ("right", "center", "roadCenter")
+
 
 def spec_from_hooks(network: Any) -> NetworkSpec:
     """The spec of a network whose class implements Flow's ``specify_*`` methods."""
@@ -133,6 +136,12 @@ def _edge(
     lanes = e.get("numLanes", kind.get("numLanes", 1))
     speed = e.get("speed", kind.get("speed", 30.0))
     shape = tuple((float(x), float(y)) for x, y in e.get("shape") or ())
+    spread = str(e.get("spreadType", kind.get("spreadType", "right")))
+    if spread not in SPREAD_TYPES:
+        raise ConfigError(
+            f"{where}: edge {e['id']!r} has spreadType {spread!r}"
+            f"{did_you_mean(spread, SPREAD_TYPES)}; SUMO's are {', '.join(SPREAD_TYPES)}"
+        )
     length = e.get("length")
     if length is None:  # as netconvert measures it: along the shape, node to node
         points = [node_xy[e["from"]], *shape, node_xy[e["to"]]] if not shape else list(shape)
@@ -146,6 +155,7 @@ def _edge(
         float(speed),
         shape,
         int(e.get("priority", 78)),
+        spread,
     )
 
 
@@ -166,8 +176,9 @@ def _connections(given: Any, edges: set[str], owner: str) -> tuple[Connection, .
                     f"{did_you_mean(str(c.get(key)), edges)}"
                 )
         out.append(
-            Connection(str(c["from"]), str(c["to"]), int(c.get("fromLane", 0)),
-                       int(c.get("toLane", 0)))
+            Connection(
+                str(c["from"]), str(c["to"]), int(c.get("fromLane", 0)), int(c.get("toLane", 0))
+            )
         )
     return tuple(out)
 
