@@ -267,7 +267,7 @@ def test_accel_env_brings_its_av_back_after_it_leaves() -> None:
                 "env.horizon=400") as env:  # fmt: skip
         assert isinstance(env, BottleneckAccelEnv)
         assert env.rl_id_list == ["rl_0"]
-        assert env.observation_space.shape == (4 + 16 + 2 * 5,)
+        assert env.observation_space.shape == (4 + 16 + 2 * 5 + 2,)  # + Flow's fake_edge
         check_env(env, skip_render_check=True)
         env.reset(seed=0)
         vk = env.k.vehicle

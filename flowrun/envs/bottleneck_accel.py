@@ -24,6 +24,10 @@ ADDITIONAL_ENV_PARAMS = {**BASE_PARAMS, **ADDITIONAL_RL_ENV_PARAMS}
 POSITION_NORM, EDGE_NORM = 1000.0, 6.0
 #: Flow's reward weights: forward progress of the AVs, lane-change actions
 PROGRESS_GAIN, LANE_CHANGE_GAIN = 0.1, 1.0
+#: Flow's bottleneck has one more edge, ``fake_edge`` (1 m, off the road, drawn for the GUI
+#: only); it is in Flow's ``get_edge_list()`` (last: SUMO lists edges by id), so Flow's
+#: observation ends with its pair (mean speed, density), always (0, 0): kept, as Flow's
+FLOW_FAKE_EDGE_PAIR = np.zeros(2)
 
 
 class BottleneckAccelEnv(BottleneckEnv):
@@ -38,7 +42,8 @@ class BottleneckAccelEnv(BottleneckEnv):
     per AV in ``rl_id_list`` order (zeros while it is away): ``x / 1000``, ``v / v_max``,
     ``lane / 4``, ``edge / 6``; per AV, over ``4 * scaling`` lanes: gaps to the nearest car
     ahead / behind on each lane of its edge (``/ 1000``; 1 without one), their speeds
-    ``/ v_max`` (0 without one); per edge: mean speed ``/ v_max`` and cars per metre.
+    ``/ v_max`` (0 without one); per edge: mean speed ``/ v_max`` and cars per metre, then
+    Flow's pair (0, 0) of its off-road ``fake_edge`` (:data:`FLOW_FAKE_EDGE_PAIR`).
     Action: per AV ``[acceleration, lane-change direction]`` (direction rounded: -1 right,
     +1 left), for the AVs present ordered by position; a car changes lane at most once per
     ``lane_change_duration`` simulation steps.
@@ -75,6 +80,7 @@ class BottleneckAccelEnv(BottleneckEnv):
     def observation_space(self) -> Box:  # type: ignore[override]
         """Per-AV state, per-AV neighbours on every lane, per-edge speed and density."""
         n = 4 * self.num_rl + 4 * self._lanes * self.num_rl + 2 * len(self._edges())
+        n += FLOW_FAKE_EDGE_PAIR.size
         return Box(low=0.0, high=1.0, shape=(n,), dtype=np.float32)
 
     def _edges(self) -> list[str]:
@@ -116,7 +122,9 @@ class BottleneckAccelEnv(BottleneckEnv):
                 per_edge += [speed, len(ids) / net.edge_length(edge)]
             else:
                 per_edge += [0.0, 0.0]
-        obs = np.concatenate([own.reshape(-1), near.reshape(-1), np.array(per_edge)])
+        obs = np.concatenate(
+            [own.reshape(-1), near.reshape(-1), np.array(per_edge), FLOW_FAKE_EDGE_PAIR]
+        )
         return np.clip(np.nan_to_num(obs, posinf=1.0), 0.0, 1.0)
 
     def _present_rl(self) -> list[str]:

@@ -188,8 +188,13 @@ class MultiTrafficLightGridPOEnv(MultiAgentEnv, TrafficLightGridPOEnv):  # type:
             ])  # fmt: skip
         return obs
 
-    def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
-        """Flow's shared delay reward divided by the number of lights."""
+    def compute_reward(  # type: ignore[override]  # {} without actions, as Flow's
+        self, rl_actions: Any, **kwargs: Any
+    ) -> float | dict[str, float]:
+        """Flow's shared delay reward divided by the number of lights; ``{}`` for no actions
+        (Flow's warm-up steps)."""
+        if rl_actions is None:
+            return {}
         delay = rewards.min_delay_unscaled(self)
         if self.env_params.evaluate:
             return -delay / self.num_traffic_lights

@@ -80,7 +80,10 @@ class MultiAgentHighwayPOEnv(NeighbourAgentsEnv):
     def compute_reward(  # type: ignore[override]  # one reward per agent
         self, rl_actions: Any, **kwargs: Any
     ) -> dict[str, float]:
-        """Flow's reward of each agent (its speed when evaluating)."""
+        """Flow's reward of each agent (its speed when evaluating); ``{}`` for no actions
+        (Flow's warm-up steps)."""
+        if rl_actions is None:
+            return {}
         vk = self.k.vehicle
         if self.env_params.evaluate:
             return {a: float(vk.get_speed(a)) for a in self.agents}

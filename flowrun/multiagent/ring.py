@@ -108,7 +108,10 @@ class MultiAgentWaveAttenuationPOEnv(MultiAgentEnv):
         return obs
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
-        """Shared speed reward minus acceleration penalty (mean speed when evaluating)."""
+        """Shared speed reward minus acceleration penalty (mean speed when evaluating); 0 for
+        no actions (Flow's warm-up steps)."""
+        if rl_actions is None:
+            return 0.0
         speeds = self.k.vehicle.speed
         if self.env_params.evaluate:
             return float(np.mean(speeds)) if speeds.size else 0.0
