@@ -1,8 +1,9 @@
 """Bad signal input (issue 11): each is one clear message naming the place, and exit code 1.
 
 A light on a node that is not a junction, phases with unknown characters, an actuated program
-without room for its detectors, an RL signal env on a network without lights. The CLI cases
-run netconvert on Flow's grid0 (no simulation steps).
+without room for its detectors, a state whose length is not the junction's number of links,
+an RL signal env on a network without lights (or not a grid). The CLI cases run netconvert on
+Flow's grid0 (no simulation steps).
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ from flowrun.networks.traffic_light_grid import TrafficLightGridNetwork
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID0 = (ROOT / "configs" / "grid0.yaml").read_text()
+SUGIYAMA = (ROOT / "configs" / "sugiyama.yaml").read_text()
+SUGIYAMA_PARAMS = "{max_accel: 1, max_decel: 1, target_velocity: 10, sort_vehicles: false}"
 LIGHT = """\
 traffic_lights:
   lights:
@@ -80,6 +83,10 @@ def bad_config(tmp_path: Path, case: str) -> Path:
         "rl_without_lights": GRID0.replace(
             "  speed_limit: 35\n", "  speed_limit: 35\n  traffic_lights: false\n"
         ),
+        "state_length": GRID0 + LIGHT.format(node="center4", state="GrGrG"),
+        "signal_env_on_a_ring": SUGIYAMA.replace("class: AccelEnv", "class: TrafficLightGridPOEnv")
+        .replace(SUGIYAMA_PARAMS, "{target_velocity: 50, switch_time: 3, num_observed: 2, "
+                 "discrete: false, tl_type: actuated}"),
     }[case]
     path = tmp_path / f"{case}.yaml"
     path.write_text(text)
@@ -99,13 +106,21 @@ def line_of(path: Path, text: str) -> int:
         ("unknown_character", "validate", "state: GrXr", "unknown signal character(s) 'X'"),
         ("no_detector_room", "validate", "tls_type: actuated",
          "actuated light 'center4' has no room for its detector"),
-        ("rl_without_lights", "baseline", None,
+        ("rl_without_lights", "baseline", "traffic_lights: false",
          "TrafficLightGridBenchmarkEnv switches traffic lights, but network "
-         "'traffic_light_grid' has none"),
+         "'traffic_light_grid' has none (traffic_lights: false); set network.traffic_lights: "
+         "true"),
+        ("rl_without_lights", "validate", "traffic_lights: false",
+         "network.traffic_lights: TrafficLightGridBenchmarkEnv switches traffic lights"),
+        ("state_length", "baseline", "state: GrGrG",
+         "state 'GrGrG' has 5 characters but junction 'center4' controls 4 links"),
+        ("signal_env_on_a_ring", "baseline", "type: ring",
+         "TrafficLightGridPOEnv switches traffic lights, but network 'ring' has none; use "
+         "network type traffic_light_grid, or put lights on its junctions"),
     ],
 )  # fmt: skip
 def test_bad_signal_input_is_one_line_and_exit_1(
-    tmp_path: Path, case: str, command: str, at: str | None, words: str
+    tmp_path: Path, case: str, command: str, at: str, words: str
 ) -> None:
     path = bad_config(tmp_path, case)
     args = [command, str(path)]
@@ -117,5 +132,5 @@ def test_bad_signal_input_is_one_line_and_exit_1(
     assert len(lines) == 1 and lines[0].startswith("error: "), out.output
     assert words in lines[0]
     assert "Traceback" not in out.output
-    if at is not None:  # a config error names the file and the line to change
-        assert f"{path}:{line_of(path, at)}:" in lines[0]
+    # every one names the file and the line to change
+    assert f"{path}:{line_of(path, at)}:" in lines[0]

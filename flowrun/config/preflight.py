@@ -62,6 +62,7 @@ def preflight(cfg: ExperimentConfig, loc: Locations) -> None:
     if cls is not None:
         declared = dict(getattr(cls, "ADDITIONAL_ENV_PARAMS", {}) or {})
         check_env_params(cfg.env.additional_params, declared, loc)
+        _check_env_network(cfg, cls, loc)
     if cfg.train is not None:
         _check_rl_vehicles(cfg, cls, loc)
         _check_hyperparam_names(cfg, loc)
@@ -110,6 +111,19 @@ def _env_class(cfg: ExperimentConfig, loc: Locations) -> Any:
         return None
     try:
         return find(cfg)
+    except ConfigError as err:
+        raise _relocated(err, loc) from None
+
+
+def _check_env_network(cfg: ExperimentConfig, cls: Any, loc: Locations) -> None:
+    """The env class's own check of its network (``check_network``, e.g. a signal env on a
+    network without lights), where it has one; builds the network object, starts nothing."""
+    check = getattr(cls, "check_network", None)
+    make_network = optional("flowrun.envs.factory", "make_network")
+    if check is None or make_network is None:
+        return
+    try:
+        check(make_network(cfg))
     except ConfigError as err:
         raise _relocated(err, loc) from None
 

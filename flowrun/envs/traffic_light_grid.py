@@ -17,6 +17,7 @@ from flowrun.core import rewards
 from flowrun.envs.base import Env
 from flowrun.envs.signals import SwitchTimers, discrete_mask, edge_number, phase_state
 from flowrun.errors import ConfigError
+from flowrun.networks.base import Network
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     # seconds of yellow of a switch (Flow's "minimum switch time")
@@ -67,17 +68,34 @@ class TrafficLightGridEnv(Env):
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
+    @classmethod
+    def check_network(cls, network: Network) -> None:
+        """What this env needs of its network: at least one traffic light (``flowrun
+        validate`` / ``baseline`` / ``train`` call this before a run, to name the YAML line).
+
+        Raises:
+            ConfigError: the network has no light, at the key to change.
+        """
+        if any(n.type == "traffic_light" for n in network.spec.nodes):
+            return
+        name = network.network_type or type(network).__name__
+        head = f"{cls.__name__} switches traffic lights, but network '{name}' has none"
+        if network.net_params.additional_params.get("traffic_lights") is False:
+            raise ConfigError(
+                f"{head} (traffic_lights: false); set network.traffic_lights: true",
+                path="network.traffic_lights",
+            )
+        raise ConfigError(
+            f"{head}; use network type traffic_light_grid, or put lights on its junctions "
+            "under traffic_lights.lights",
+            path="network.type",
+        )
+
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
+        self.check_network(self.network)
         spec = self.network.spec
         self.light_ids = [n.id for n in spec.nodes if n.type == "traffic_light"]
-        if not self.light_ids:
-            raise ConfigError(
-                f"{type(self).__name__} switches traffic lights, but network "
-                f"'{self.network.network_type or type(self.network).__name__}' has none "
-                "(use network type traffic_light_grid with traffic_lights: true)",
-                path="network",
-            )
         p = self.env_params.additional_params
         grid = self.net_params.additional_params.get("grid_array") or getattr(
             self.network, "grid_array", {}

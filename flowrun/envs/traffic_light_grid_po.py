@@ -19,6 +19,7 @@ from flowrun.envs.traffic_light_grid import (
     TrafficLightGridEnv,
 )
 from flowrun.errors import ConfigError
+from flowrun.networks.base import Network
 
 #: Flow's vehicle length in the edge density, m.
 VEHICLE_LENGTH = 5.0
@@ -53,14 +54,10 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
                 path="env.additional_params.num_observed",
             )
         self.num_observed = int(num)
-        mapping = getattr(self.network, "node_mapping", None)
-        if mapping is None:
-            raise ConfigError(
-                f"{type(self).__name__} needs a grid network (its node_mapping of incoming "
-                "edges per light); use network type traffic_light_grid",
-                path="network",
-            )
-        self.node_mapping: list[tuple[str, list[str]]] = list(mapping)
+        # there is one: check_network ran in the parent's __init__
+        self.node_mapping: list[tuple[str, list[str]]] = list(
+            getattr(self.network, "node_mapping", [])
+        )
         self.edge_list = [e.id for e in self.network.spec.edges]
         self._edge_col = {e: i for i, e in enumerate(self.edge_list)}
         self._col_names: list[str] | None = None  # the lane table _col_by_index was built for
@@ -79,6 +76,22 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         by_id = {e.id: e for e in self.network.spec.edges}
         self._slot_length = np.array([by_id[e].length for e in observed_edges])
         self._slot_num = np.array([self._edge_num[e] for e in observed_edges])
+
+    @classmethod
+    def check_network(cls, network: Network) -> None:
+        """Lights (see the parent's), and a grid: each light's incoming edges.
+
+        Raises:
+            ConfigError: no light, or a network without ``node_mapping``.
+        """
+        super().check_network(network)
+        if getattr(network, "node_mapping", None) is None:
+            raise ConfigError(
+                f"{cls.__name__} needs a grid network (its node_mapping of incoming edges "
+                f"per light), not '{network.network_type or type(network).__name__}'; use "
+                "network type traffic_light_grid",
+                path="network.type",
+            )
 
     @property
     def observation_space(self) -> Box:  # type: ignore[override]
