@@ -196,15 +196,39 @@ def test_infinite_horizon_needs_num_steps() -> None:
         exp.run(1)
 
 
-def test_convert_to_csv_writes_flow_columns(tmp_path: Path) -> None:
-    sim = SumoParams(sim_step=0.1, emission_path=str(tmp_path / "data"))
+def test_convert_to_csv_writes_flows_emission_files(tmp_path: Path) -> None:
+    data = tmp_path / "data"
+    sim = SumoParams(sim_step=0.1, emission_path=str(data))
     exp = Experiment(ring_params(sim=sim))
-    exp.run(1, 10, convert_to_csv=True)
-    (path,) = exp.csv_files
-    with path.open() as f:
-        rows = list(csv.DictReader(f))
-    assert len(rows) >= 22 * 10 and {"time", "id", "speed", "edge_id"} <= set(rows[0])
-    assert path.with_suffix(".mcap").is_file()
+    exp.run(2, 10, convert_to_csv=True)
+    name = exp.env.network.name
+    # Flow's names: <emission_path>/<network name>-<run>_emission.csv
+    assert exp.csv_files == [data / f"{name}-0_emission.csv", data / f"{name}-1_emission.csv"]
+    with exp.csv_files[0].open() as f:
+        reader = csv.reader(f)
+        header = next(reader)
+        rows = [dict(zip(header, row, strict=True)) for row in reader]
+    assert header == [
+        "time", "id", "x", "y", "speed", "headway", "leader_id",
+        "target_accel_with_noise_with_failsafe", "target_accel_no_noise_no_failsafe",
+        "target_accel_with_noise_no_failsafe", "target_accel_no_noise_with_failsafe",
+        "realized_accel", "road_grade", "edge_id", "lane_number", "distance",
+        "relative_position", "follower_id", "leader_rel_speed",
+    ]  # fmt: skip
+    assert len(rows) == 22 * 11  # the state at reset and after each of the 10 steps
+    # grouped by vehicle, then time from 0 at reset in steps of sim_step (Flow's order)
+    first = rows[:11]
+    assert {r["id"] for r in first} == {"idm_0"}
+    assert [float(r["time"]) for r in first] == [round(0.1 * k, 2) for k in range(11)]
+    last = rows[-1]
+    speed, lead = float(last["speed"]), last["leader_id"]
+    at = [r for r in rows if r["id"] == lead and r["time"] == last["time"]]
+    lead_speed = float(at[0]["speed"])
+    assert float(last["leader_rel_speed"]) == pytest.approx(lead_speed - speed)
+    assert float(last["target_accel_no_noise_no_failsafe"]) == pytest.approx(
+        float(last["target_accel_with_noise_with_failsafe"])
+    )
+    assert at[0]["follower_id"] == last["id"]
 
 
 def test_convert_to_csv_needs_an_emission_path() -> None:

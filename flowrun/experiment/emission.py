@@ -1,13 +1,17 @@
 """``Experiment.run(convert_to_csv=True)``: per-step vehicle states as CSV, as Flow wrote them.
 
-Flow wrote SUMO's emission XML into ``sim_params.emission_path`` and converted it to CSV.
-flowrun logs each run to MCAP and exports the CSV from that log
-(:func:`flowrun.replay.export.to_csv`, Flow's emission columns), next to it.
+Flow's simulation kernel kept every vehicle's state at every step and wrote it, at the end of
+run ``i``, to ``<emission_path>/<network name>-<i>_emission.csv`` (:data:`FLOW_EMISSION_COLUMNS`).
+flowrun logs each run to MCAP (in a fresh folder under ``emission_path``) and writes Flow's
+file from that log (:func:`flow_emission_csv`).
 """
 
 from __future__ import annotations
 
+import csv
 import logging
+import math
+import os
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -20,6 +24,31 @@ from flowrun.experiment.rundir import unique_dir
 from flowrun.recording.writer import McapRecorder
 
 log = logging.getLogger(__name__)
+
+#: Flow's emission CSV columns, in Flow's order (``TraCISimulation.save_emission``).
+FLOW_EMISSION_COLUMNS = (
+    "time",
+    "id",
+    "x",
+    "y",
+    "speed",
+    "headway",
+    "leader_id",
+    "target_accel_with_noise_with_failsafe",
+    "target_accel_no_noise_no_failsafe",
+    "target_accel_with_noise_no_failsafe",
+    "target_accel_no_noise_with_failsafe",
+    "realized_accel",
+    "road_grade",
+    "edge_id",
+    "lane_number",
+    "distance",
+    "relative_position",
+    "follower_id",
+    "leader_rel_speed",
+)
+#: Flow's headway without a leader (m) and its speed of "no vehicle" (m/s).
+NO_LEADER_GAP, NO_VEHICLE_SPEED = 1000.0, -1001.0
 
 
 def emission_dir(env: Env, name: str) -> Path:
@@ -61,12 +90,62 @@ def run_recorder(
     return McapRecorder(folder / f"run_{run}.mcap", metadata=meta, attachments=attachments)
 
 
-def export_csv(mcap_path: Path) -> Path:
-    """Write the CSV of one run's log next to it (``run_0.mcap`` -> ``run_0.csv``)."""
-    from flowrun.recording import open_log
-    from flowrun.replay.export import to_csv
+def flow_emission_path(emission_path: str, network_name: str, run: int) -> Path:
+    """Flow's file of run ``run``: ``<emission_path>/<network_name>-<run>_emission.csv``."""
+    return Path(emission_path) / f"{network_name}-{run}_emission.csv"
 
-    out = mcap_path.with_suffix(".csv")
-    rows = to_csv(open_log(mcap_path), out)
-    log.info("wrote %s (%d rows)", out, rows)
-    return out
+
+def flow_emission_csv(mcap_path: Path, out: Path, sim_step: float) -> int:
+    """Write Flow's emission CSV of one run from its log; returns the number of rows.
+
+    As Flow's: rows grouped by vehicle (in order of first appearance), then by time; ``time``
+    counts from 0 at reset (``round(step * sim_step, 2)``, warm-up included); ``headway`` is
+    1000 without a leader, ``leader_id`` / ``follower_id`` empty without one and
+    ``leader_rel_speed`` is then Flow's ``-1001 - speed``; ``road_grade`` is 0.
+    flowrun logs one commanded acceleration (with noise and fail-safe, as applied), so the
+    four ``target_accel_*`` columns hold it (they differ in Flow only for a controller with
+    noise or a fail-safe); where no controller commanded the car they hold the realised
+    acceleration, as Flow's ``get_accel`` falls back to. The file is replaced atomically.
+    """
+    from flowrun.recording import open_log
+
+    rows: dict[str, list[list[object]]] = {}
+    for frame in open_log(mcap_path).frames():
+        n = len(frame.ids)
+        if n == 0:
+            continue
+        t = round(frame.step * sim_step, 2)
+        index = {vid: i for i, vid in enumerate(frame.ids)}
+        follower = [""] * n
+        for i, leader in enumerate(frame.leader):
+            j = index.get(leader)
+            if j is not None:
+                follower[j] = frame.ids[i]
+        for i, vid in enumerate(frame.ids):
+            speed, real = float(frame.speed[i]), float(frame.accel_real[i])
+            cmd = float(frame.accel_cmd[i])
+            target = real if math.isnan(cmd) else cmd
+            leader = frame.leader[i]
+            j = index.get(leader)
+            headway = float(frame.headway[i])
+            rows.setdefault(vid, []).append([
+                t, vid, float(frame.x[i]), float(frame.y[i]), speed,
+                NO_LEADER_GAP if math.isinf(headway) else headway, leader,
+                target, target, target, target, real, 0, frame.edges[i], int(frame.lanes[i]),
+                float(frame.odometer[i]), float(frame.lane_pos[i]), follower[i],
+                (float(frame.speed[j]) if j is not None else NO_VEHICLE_SPEED) - speed,
+            ])  # fmt: skip
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.{os.getpid()}.partial")
+    try:
+        with open(tmp, "w", newline="") as f:
+            writer = csv.writer(f)
+            writer.writerow(FLOW_EMISSION_COLUMNS)
+            for vehicle_rows in rows.values():
+                writer.writerows(vehicle_rows)
+        os.replace(tmp, out)
+    finally:
+        tmp.unlink(missing_ok=True)
+    count = sum(len(r) for r in rows.values())
+    log.info("wrote %s (%d rows)", out, count)
+    return count

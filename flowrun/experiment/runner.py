@@ -122,9 +122,10 @@ class Experiment:
                 ``None`` means ``env_params.horizon``, as Flow's ``run(num_runs)``. A callable
                 here is taken as ``rl_actions`` (Flow's ``run(num_runs, rl_actions)``).
             rl_actions: maps an observation to an action; ``None`` sends no RL action.
-            convert_to_csv: write each run's vehicle states as CSV with Flow's emission
-                columns (from its MCAP log: the run's own log when recording, else a log in a
-                new folder under ``sim_params.emission_path``). Paths in ``csv_files``.
+            convert_to_csv: write run ``i``'s vehicle states to Flow's
+                ``<emission_path>/<network name>-<i>_emission.csv`` with Flow's columns (from
+                its MCAP log: the run's own log when recording, else a log in a new folder
+                under ``sim_params.emission_path``). Paths in ``csv_files``.
             seed: run ``i`` resets with seed ``seed + i``; ``None`` continues the env's
                 generator (first reset seeded by ``sim.seed``).
 
@@ -204,7 +205,7 @@ class Experiment:
                 custom[key].append(float(np.mean(got)) if got else float("nan"))
             log.info("run %d: return %.3f", run, ret)
             if convert_to_csv and sink is not None:
-                self._export(sink)
+                self._export(sink, run)
         velocities = [m.mean_speed for m in self.metrics]
         return {
             "returns": returns,
@@ -237,12 +238,21 @@ class Experiment:
         folder = emission_dir(self.env, name)
         return lambda run: run_recorder(folder, self.env, run, self.config)
 
-    def _export(self, sink: FrameSink) -> None:
-        from flowrun.experiment.emission import export_csv
+    def _export(self, sink: FrameSink, run: int) -> None:
+        from flowrun.experiment.emission import flow_emission_csv, flow_emission_path
 
         path = getattr(sink, "path", None)
         if isinstance(path, Path) and path.suffix == ".mcap":
-            self.csv_files.append(export_csv(path))
+            base = self.env.sim_params.emission_path
+            if base is None:  # a sink of the caller's own: emission_dir did not check
+                raise ConfigError(
+                    "convert_to_csv=True writes Flow's <network>-<run>_emission.csv files into "
+                    "SumoParams(emission_path=...); set it (YAML: sim.emission_path)",
+                    path="sim.emission_path",
+                )
+            out = flow_emission_path(base, self.env.network.name, run)
+            flow_emission_csv(path, out, self.env.sim_params.sim_step)
+            self.csv_files.append(out)
 
     def _drain(self, sink: FrameSink | None, stats: RunAccumulator) -> None:
         """Aggregate the queued steps in one batch, fold them in, and write their frames."""
