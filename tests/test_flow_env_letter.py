@@ -8,8 +8,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("pettingzoo")
-
 from flowrun.config.loader import load_config
 from flowrun.config.params import EnvParams, NetParams, SumoParams, VehicleParams
 from flowrun.envs import BottleneckAccelEnv
@@ -51,6 +49,7 @@ def test_bottleneck_accel_obs_ends_with_flows_fake_edge_pair() -> None:
 
 
 def test_multiagent_rewards_without_actions_are_flows(tmp_path: Path) -> None:
+    pytest.importorskip("pettingzoo")
     highway = CONFIGS / "multiagent_merge.yaml"  # the highway's reward class on a merge road
     cases = [
         (CONFIGS / "multiagent_ring.yaml", [], 0.0),
@@ -74,3 +73,32 @@ def test_multiagent_rewards_without_actions_are_flows(tmp_path: Path) -> None:
         assert ring.compute_reward({}, fail=False) > 0.0  # 4 mean(v) / 20: cars are moving
     finally:
         ring.close()
+
+
+def test_grid_cars_closest_to_an_intersection_are_flows() -> None:
+    env = make_env(load_config(CONFIGS / "grid0.yaml"))
+    try:
+        env.reset(seed=0)
+        for _ in range(40):
+            env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+        vk, net = env.k.vehicle, env.k.network
+        incoming = env.network.node_mapping[0][1]  # light center0: its four incoming edges
+        per_edge = [env.get_closest_to_intersection(e, 3) for e in incoming]
+        assert any(len(ids) >= 2 for ids in per_edge)
+        for edge, ids in zip(incoming, per_edge, strict=True):
+            cars = vk.get_ids_by_edge(edge)
+            dist = {v: net.edge_length(edge) - vk.get_position(v) for v in cars}
+            assert ids == sorted(cars, key=dist.__getitem__)[:3]  # nearest the node first
+            assert env.get_distance_to_intersection(ids) == pytest.approx([dist[v] for v in ids])
+            padded = env.get_closest_to_intersection(edge, 5, padding=True)
+            assert padded == sorted(cars, key=dist.__getitem__)[:5] + [""] * (5 - len(cars[:5]))
+        # a list of edges: the per-edge lists joined (Flow's code pads no list)
+        assert env.get_closest_to_intersection(incoming, 3) == [v for ids in per_edge for v in ids]
+        assert env.get_closest_to_intersection(incoming, 3, padding=True) == [
+            v for ids in per_edge for v in ids
+        ]
+        assert env.get_distance_to_intersection("nope") == -10.0
+        with pytest.raises(ValueError, match="num_closest=0"):
+            env.get_closest_to_intersection(incoming, 0)
+    finally:
+        env.close()

@@ -207,6 +207,43 @@ class TrafficLightGridEnv(Env):
             vk.remove(veh_id)
             vk.add(veh_id, type_id=type_id, edge=entry, pos="0", lane=str(lane), speed="max")
 
+    # ------------------------------------------------------------------ Flow's helpers
+    def get_distance_to_intersection(self, veh_ids: str | list[str]) -> Any:
+        """Distance (m) from a car (or each of a list) to the node its edge leads to, as
+        Flow's: edge length minus lane position; 0 on a junction's link (``center`` in the
+        edge id); -10 for a car not in the network."""
+        if isinstance(veh_ids, list):
+            return [self.get_distance_to_intersection(v) for v in veh_ids]
+        edge = self.k.vehicle.get_edge(veh_ids)
+        if edge == "":
+            return -10.0
+        if "center" in edge:
+            return 0.0
+        return self.k.network.edge_length(edge) - self.k.vehicle.get_position(veh_ids)
+
+    def get_closest_to_intersection(
+        self, edges: str | list[str], num_closest: int, padding: bool = False
+    ) -> list[str]:
+        """Ids of the ``num_closest`` cars nearest the end of each edge, nearest first (Flow's).
+
+        For a list of edges the per-edge lists are joined in order. ``padding`` fills an edge
+        with fewer cars up to ``num_closest`` with ``""`` (as Flow's code, only for one edge:
+        a list is joined unpadded).
+
+        Raises:
+            ValueError: ``num_closest`` is not positive.
+        """
+        if num_closest <= 0:
+            raise ValueError(
+                f"get_closest_to_intersection: num_closest={num_closest}, expected a positive "
+                "number of cars per edge"
+            )
+        if isinstance(edges, list):
+            return [v for e in edges for v in self.get_closest_to_intersection(e, num_closest)]
+        ids = sorted(self.k.vehicle.get_ids_by_edge(edges), key=self.get_distance_to_intersection)
+        pad = [""] * (num_closest - len(ids)) if padding else []
+        return ids[:num_closest] + pad
+
     # ------------------------------------------------------------------ observations
     def _car_columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Speed / max speed, distance to the junction / max_dist, edge number, per car."""
