@@ -294,6 +294,7 @@ def _check_train_values(cfg: ExperimentConfig, loc: Locations) -> None:
 STORED_ONLY = {
     "port": "is Flow's TraCI port; flowrun runs SUMO in-process (libsumo) and ignores it",
     "num_clients": "is Flow's number of TraCI clients; flowrun ignores it",
+    "use_libsumo": "is Flow's switch to libsumo; flowrun always runs libsumo and ignores it",
     "save_render": "is for Flow's pyglet renderer, which flowrun does not have "
     "(baseline --render writes a GIF)",
     "show_radius": "is for Flow's pyglet renderer, which flowrun does not have",

@@ -59,6 +59,8 @@ class SumoParams:
         overtake_right: allow overtaking on the right (SUMO
             ``--lanechange.overtake-right``). Stored for the kernel's command line.
         num_clients: TraCI clients (Flow's). Stored, not used.
+        use_libsumo: Flow's switch from TraCI to libsumo. Stored, not used: flowrun always
+            runs libsumo (sumo-gui over TraCI when rendering).
         save_render, sight_radius, show_radius, pxpm: Flow's pyglet renderer settings
             (save frames, RL observation radius in m, draw it, pixels per metre). Stored
             only: flowrun has no pyglet renderer.
@@ -84,6 +86,7 @@ class SumoParams:
     no_step_log: bool = True
     overtake_right: bool = False
     num_clients: int = 1
+    use_libsumo: bool = False
     save_render: bool = False
     sight_radius: float = 25.0
     show_radius: bool = False

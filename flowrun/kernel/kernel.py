@@ -76,16 +76,7 @@ class Kernel:
         """
         self.close()
         spec = network.spec
-        self.net_file = build_network(spec, self.work_dir, name=network.network_type or "network")
-        self.work_dir.mkdir(parents=True, exist_ok=True)  # a template is not built there
-        routes = self.work_dir / f"{self.net_file.stem.removesuffix('.net')}.rou.xml"
-        routes.write_text(routes_xml(spec, network.vehicles, network.net_params.inflows))
-        extra = tuple(Path(f) for f in spec.extra_files)  # a template's own vTypes and routes
-        tls_file = write_tls_file(network.traffic_lights, self.net_file, self.work_dir)
-        tls = () if tls_file is None else (tls_file,)
-        self.process = SumoProcess(
-            SumoFiles(self.net_file, routes, extra, tls), self.sim_params, self.gui
-        )
+        self.process = SumoProcess(self.write_files(network), self.sim_params, self.gui)
         api = self.process.start()
         try:
             # Flow's start_simulation steps SUMO once on the empty network before its reset
@@ -110,6 +101,20 @@ class Kernel:
         self.simulation.before_step = self.vehicle.send_commands
         self.simulation.after_teleport = self.vehicle.resync
         self.vehicle.update(first=True)
+
+    def write_files(self, network: Network) -> SumoFiles:
+        """Write ``network``'s SUMO files into the work folder: the network (built by
+        netconvert, or the template), its vehicle types, routes and inflows, and its signal
+        programs."""
+        spec = network.spec
+        self.net_file = build_network(spec, self.work_dir, name=network.network_type or "network")
+        self.work_dir.mkdir(parents=True, exist_ok=True)  # a template is not built there
+        routes = self.work_dir / f"{self.net_file.stem.removesuffix('.net')}.rou.xml"
+        routes.write_text(routes_xml(spec, network.vehicles, network.net_params.inflows))
+        extra = tuple(Path(f) for f in spec.extra_files)  # a template's own vTypes and routes
+        tls_file = write_tls_file(network.traffic_lights, self.net_file, self.work_dir)
+        tls = () if tls_file is None else (tls_file,)
+        return SumoFiles(self.net_file, routes, extra, tls)
 
     def _insert(self, api: Any, table: VehicleTable) -> None:
         v = api.vehicle
