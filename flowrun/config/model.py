@@ -43,7 +43,7 @@ class TrainConfig:
         eval_episodes: episodes per evaluation and in the final evaluation.
         eval_backend: where the periodic evaluation runs its episodes: ``sumo`` (default) or
             ``numpy`` (single-lane rings only: the numpy backend's rings, which equal SUMO's to
-            1e-9 m/s, all episodes stepped together; ~1 % of the cost).
+            1e-9 m/s, all episodes stepped together; about a fifth of the cost).
         checkpoint_freq: save a checkpoint every this many environment steps (0 = never).
         backend: ``sb3`` (stable-baselines3, default) or ``rllib`` (Ray RLlib).
         num_env_runners: RLlib only: env runners (one process and one SUMO each); ``None``
