@@ -102,3 +102,24 @@ def test_grid_cars_closest_to_an_intersection_are_flows() -> None:
             env.get_closest_to_intersection(incoming, 0)
     finally:
         env.close()
+
+
+def test_multiagent_step_none_is_flows_step_without_actions() -> None:
+    pytest.importorskip("pettingzoo")
+    env = make_env(load_config(CONFIGS / "multiagent_ring.yaml", ["env.warmup_steps=2"]))
+    try:
+        env.reset(seed=0)
+        agents = list(env.agents)
+        assert agents
+        calls: list[object] = []
+        original = env._apply_rl_actions
+        env._apply_rl_actions = lambda a: calls.append(a) or original(a)  # type: ignore[method-assign]
+        obs, rewards, term, trunc, _ = env.step(None)
+        assert calls == []  # no RL command: SUMO drives the AVs for the step, as Flow
+        assert set(obs) == set(rewards) == set(agents)
+        assert rewards == {a: 0.0 for a in agents}  # Flow's compute_reward(None) on the ring
+        assert not any(term.values()) and not any(trunc.values())
+        _, rewards, *_ = env.step({a: np.zeros(1, dtype=np.float32) for a in agents})
+        assert all(r > 0 for r in rewards.values())
+    finally:
+        env.close()

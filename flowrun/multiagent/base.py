@@ -146,7 +146,7 @@ class MultiAgentEnv(Env, ParallelEnv[str, Obs, Action]):
         return obs, {a: dict(info) for a in self.agents}
 
     def step(  # type: ignore[override]
-        self, actions: dict[str, Any]
+        self, actions: dict[str, Any] | None
     ) -> tuple[
         dict[str, Obs],
         dict[str, float],
@@ -154,14 +154,18 @@ class MultiAgentEnv(Env, ParallelEnv[str, Obs, Action]):
         dict[str, bool],
         dict[str, dict[str, Any]],
     ]:
-        """Apply one action per live agent for ``sims_per_step`` simulation steps."""
+        """Apply one action per live agent for ``sims_per_step`` simulation steps
+        (``None``: no RL action at all, as Flow's ``step(None)``; rewarded as Flow's
+        ``compute_reward(None)``)."""
         if self._needs_reset or not self.k.started:
             super().step(None)  # raises ResetNeeded with the base's explanation
-        unknown = [a for a in actions if a not in self._possible]
+        unknown = [a for a in actions or () if a not in self._possible]
         if unknown:
             raise KeyError(f"actions for unknown agents {unknown}; agents now: {self.agents}")
         live = list(self.agents)
-        applied = {a: self._clip(actions[a]) for a in live if a in actions}
+        applied = None
+        if actions is not None:
+            applied = {a: self._clip(actions[a]) for a in live if a in actions}
         crash = False
         first = len(self.records)
         for _ in range(self.env_params.sims_per_step):
