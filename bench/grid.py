@@ -1,60 +1,74 @@
 """Step cost of the grid benchmarks (grid0 3x3, grid1 5x5) against SUMO alone, in one run.
 
-Usage: ``.venv/bin/python bench/grid.py [steps]``. Each network runs ``steps`` env steps of
-TrafficLightGridBenchmarkEnv (random switch actions) and then the same SUMO files (network,
-routes with the 300 veh/h inflows, signal programs) stepped by libsumo alone, with the env's
-switches replayed is not attempted: SUMO alone runs its own programs. Prints µs per step.
+Usage: ``.venv/bin/python bench/grid.py [steps] [repeats]`` (400 and 3 by default).
+
+For each network: a first env run (not timed) logs what the env tells SUMO (signal states
+per step, the modes of entering cars; ``bench/grid_steps.py``); SUMO alone replaying that log
+must hold the same number of cars at every step (checked: "same traffic"). Then the env
+(``TrafficLightGridBenchmarkEnv``, seeded random switch actions, one episode of ``steps``
+steps, no reset inside the timing) and the replay take turns ``repeats`` times, each from the
+same reset. Times are this process's CPU time (``time.process_time``: time spent waiting
+for a core on a busy machine is not counted), median of the repeats, µs per step.
+
+Before this bench replayed the env's traffic, SUMO alone ran its own programs without the
+signal file (other traffic: grid0 65 cars on average against the env's 62) and the env's
+timing included the reset at the end of the episode (grid0: ~9 ms, ~23 µs per step).
 """
 
 from __future__ import annotations
 
+import os
+import statistics
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
-from flowrun.envs.factory import make_env
-from flowrun.envs.grid_defaults import grid_config
-from flowrun.kernel.sumo import SumoFiles, SumoProcess
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from grid_steps import GRIDS, actions, make_grid_env, record, replay  # bench/, beside this file
 
 
-def bench(rows: int, cols: int, steps: int) -> tuple[float, float, int]:
-    env = make_env(grid_config(rows, cols))
-    rng = np.random.default_rng(0)
-    env.reset(seed=0)
-    n_actions = env.action_space.shape[0]  # type: ignore[index]
-    cars = 0
-    t0 = time.perf_counter()
-    for _ in range(steps):
-        _, _, term, trunc, _ = env.step(rng.uniform(-1, 1, n_actions).astype(np.float32))
-        cars += env.k.vehicle.num_vehicles
-        if term or trunc:
-            env.reset(seed=0)
-    env_us = (time.perf_counter() - t0) / steps * 1e6
-    net = env.k.net_file
-    assert net is not None
-    routes = Path(env.work_dir) / f"{net.stem.removesuffix('.net')}.rou.xml"
-    files = SumoFiles(net, routes)
-    params = env.k.sim_params
-    env.k.close()
-    proc = SumoProcess(files, params)
-    api = proc.start()
-    t0 = time.perf_counter()
-    for _ in range(steps):
-        api.simulationStep()
-    raw_us = (time.perf_counter() - t0) / steps * 1e6
-    proc.close()
+def env_us(name: str, steps: int) -> float:
+    """CPU µs per env step over one episode of ``steps`` steps."""
+    env = make_grid_env(name, steps)
+    todo = actions(env, steps)
+    t0 = time.process_time()
+    for action in todo:
+        env.step(action)
+    elapsed = time.process_time() - t0
     env.close()
-    return env_us, raw_us, cars // steps
+    return elapsed / steps * 1e6
+
+
+def raw_us(name: str, steps: int, log: object) -> float:
+    """CPU µs per step of SUMO alone replaying the env's commands."""
+    env = make_grid_env(name, steps)
+    assert env.k.process is not None
+    api = env.k.process.api
+    t0 = time.process_time()
+    replay(api, log, steps)  # type: ignore[arg-type]
+    elapsed = time.process_time() - t0
+    env.close()
+    return elapsed / steps * 1e6
 
 
 def main() -> None:
     steps = int(sys.argv[1]) if len(sys.argv) > 1 else 400
-    for name, (rows, cols) in {"grid0": (3, 3), "grid1": (5, 5)}.items():
-        env_us, raw_us, cars = bench(rows, cols, steps)
-        print(f"{name}: env {env_us:8.0f} us/step  SUMO alone {raw_us:8.0f} us/step  "
-              f"ratio {env_us / raw_us:5.2f}  mean cars {cars}")
+    repeats = int(sys.argv[2]) if len(sys.argv) > 2 else 3
+    print(f"load before: {os.getloadavg()[0]:.2f}")
+    for name in GRIDS:
+        log = record(name, steps)
+        env = make_grid_env(name, steps)
+        assert env.k.process is not None
+        same = replay(env.k.process.api, log, steps, count=True) == log.counts
+        env.close()
+        runs = [(env_us(name, steps), raw_us(name, steps, log)) for _ in range(repeats)]
+        e = statistics.median(r[0] for r in runs)
+        r = statistics.median(r[1] for r in runs)
+        cars = sum(log.counts) / steps
+        print(f"{name}: env {e:6.0f} us/step  SUMO alone {r:6.0f} us/step  ratio {e / r:5.2f}  "
+              f"(ratios {', '.join(f'{a / b:.2f}' for a, b in runs)})  mean cars {cars:.0f}  "
+              f"same traffic: {'yes' if same else 'NO'}")  # fmt: skip
+    print(f"load after: {os.getloadavg()[0]:.2f}")
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Instructions per step (valgrind callgrind) of Flow's grid0 and grid1: the env against SUMO
-# alone on the same network and demand (load-proof, unlike bench/grid.py's wall clock).
+# alone on the same traffic (load-proof, unlike bench/grid.py's CPU time): SUMO alone replays
+# the signal states and car modes the env set (logged by a first env run, not counted).
 # Run from the repository root: bash bench/grid_instructions.sh   (needs valgrind; ~10 min)
 # GRIDS="grid0" STEPS="300 600" bash bench/grid_instructions.sh
 # Each count runs twice (SHORT and LONG steps); the difference per step cancels start-up.
@@ -15,8 +16,8 @@ count() {  # mode grid steps -> instructions of the whole process
   "${NORAND[@]}" valgrind --tool=callgrind --callgrind-out-file=/dev/null "$PY" bench/grid_steps.py "$1" "$2" "$3" 2>&1 \
     | awk '/Collected/ {gsub(",", "", $4); print $4}'
 }
-"$PY" bench/grid_steps.py raw grid0 5  # compile every module once, outside the counts
 for grid in ${GRIDS:-grid0 grid1}; do
+  "$PY" bench/grid_steps.py record "$grid" "$LONG"  # also compiles every module, uncounted
   for mode in raw env; do
     a=$(count "$mode" "$grid" "$SHORT"); b=$(count "$mode" "$grid" "$LONG")
     eval "per_$mode=$(( (b - a) / (LONG - SHORT) ))"

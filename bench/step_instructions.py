@@ -16,7 +16,8 @@ Modes:
          each entering car gets its type's speed and lane-change modes.
     grid, grid_raw  Flow's grid0 benchmark (3x3 lights, 300 veh/h per entering edge):
          ``TrafficLightGridBenchmarkEnv`` with seeded random switch actions, and SUMO alone
-         on the same files running its own signal programs (as ``bench/grid.py``).
+         replaying the env's signal states and car modes (``bench/grid_steps.py``; run
+         ``bench/grid_steps.py record grid0 STEPS`` first, as ``step_instructions.sh`` does).
 """
 
 from __future__ import annotations

@@ -23,6 +23,8 @@ count() {  # mode steps -> instructions of the whole process
     | awk '/Collected/ {gsub(",", "", $4); print $4}'
 }
 "$PY" bench/step_instructions.py raw 10  # compile every module once, outside the counts
+case " ${MODES:-} " in *" grid_raw "*)  # SUMO alone replays the env's commands: log them
+  "$PY" bench/grid_steps.py record grid0 "$LONG" ;; esac
 per_raw=0 per_exp=0 per_rec=0 per_merge_raw=0 per_merge=0 per_grid_raw=0 per_grid=0
 for mode in ${MODES:-raw exp rec}; do  # raw exp rec merge_raw merge grid_raw grid
   a=$(count "$mode" "$SHORT"); b=$(count "$mode" "$LONG")
