@@ -30,6 +30,7 @@ class LaneTable:
         key: lane id -> key.
         edge_names: edge ids, internal ones included (``edge_index`` points here).
         edge_index, lane_index, start, speed_limit, length, internal: per lane key.
+        alone: per lane key, whether it is its edge's only lane (and False at key -1).
         edge_starts: every edge's start along the network, m (internal edges included).
     """
 
@@ -50,6 +51,10 @@ class LaneTable:
         self.length = np.array([length for _, length, _ in lanes], dtype=np.float64)
         self.speed_limit = np.array([speed for _, _, speed in lanes], dtype=np.float64)
         self.internal = np.array([lane.startswith(":") for lane, _, _ in lanes], dtype=bool)
+        counts = np.bincount(self.edge_index, minlength=len(self.edge_names))
+        #: per lane key, whether the lane is its edge's only one; one more entry (False) at
+        #: the end, so that key -1 (none) reads False
+        self.alone = np.append(counts[self.edge_index] == 1, False)
         #: every edge (internal ones included): (number of lanes, length m, speed limit m/s),
         #: the longest / fastest of its lanes
         self.edge_facts: dict[str, tuple[int, float, float]] = {}

@@ -9,7 +9,7 @@ attribute; on other steps nothing is rebuilt. A closed ring's population never c
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from itertools import compress
 
@@ -116,6 +116,9 @@ class Population:
              [c.accel for c in cls], [c.decel for c in cls]], dtype=np.float64,
         )  # fmt: skip
         self._slot_of: dict[str, int] = {}
+        #: whether a vehicle id is in the network, as a C-level call (``filter(pop.present,
+        #: ids)`` checks many ids without a Python frame per id, as ``in`` needs)
+        self.present: Callable[[object], bool] = self._slot_of.__contains__
         self._slot_group = np.zeros(0, dtype=np.int64)
         self._row_of_slot = np.zeros(0, dtype=np.int64)
         self._free: list[int] = []
@@ -198,7 +201,7 @@ class Population:
         self.lengths, self.min_gaps, self.max_speeds, self.accels, self.decels = (
             self._c_numbers[:, g]
         )
-        self.any_continuous = bool(self.continuous.any())
+        self.any_continuous = bool(np.count_nonzero(self.continuous))  # .any(): a Python layer
 
     # ------------------------------------------------------------------ lookups
     @property

@@ -129,6 +129,14 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self.on_internal = np.zeros(n, dtype=bool)
         self._lane_key = np.zeros(n, dtype=np.int64)
         self._lanes: LaneTable | None = None
+        #: simulation steps read so far (``update`` calls), the step whose lanes and positions
+        #: ``_prev_key`` / ``_prev_pos`` hold (rows as now), and this step's speeds: see
+        #: ``_read_place``
+        self._updates = 0
+        self._place_step = -2
+        self._prev_key = _NO_ROWS
+        self._prev_pos = np.zeros(0)
+        self._speed_now = np.zeros(0)
         self._following_open: Following | None = None
         #: every car's route by id (from SUMO when it enters, kept when flowrun reroutes it)
         self._route_of: dict[str, tuple[str, ...]] = {}
@@ -200,6 +208,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         """
         fast = self._fast
         self._accel_real = None
+        self._updates += 1
         if not self.ring_path:
             speed = self._update_open(first)
         else:
@@ -294,6 +303,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         fast, pop = self._fast, self.table
         ids = pop.ids
         speed = np.fromiter(map(fast.get_speed, ids), np.float64, len(ids))
+        self._speed_now = speed
         if self._new_rows.size:  # a car that just entered has no speed before: no acceleration
             self.prev_speed = self.prev_speed.copy()
             self.prev_speed[self._new_rows] = speed[self._new_rows]
@@ -328,12 +338,34 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
 
     def _read_place(self) -> None:
         """Every car's lane and position on it (this step); what follows from them is
-        derived when first asked (:meth:`_derive_place`)."""
+        derived when first asked (:meth:`_derive_place`).
+
+        The lane id is asked of SUMO only for the cars that may have changed lanes. Where the
+        last step's places were read, a car on the only lane of its edge whose position grew
+        by exactly ``speed * dt`` (SUMO's Euler step, bit for bit) is on the same lane: had it
+        passed onto the next lane, its position would have lost that lane's length, and it
+        cannot change lanes sideways. Any other car (entered, on a multi-lane edge, crossing
+        a lane's end, teleported, moved by a command, or any step method but Euler) is read.
+        """
         self._place_pending = False
         fast, lanes, ids = self._fast, self._lanes, self.table.ids
         assert lanes is not None
-        self._lane_key = lanes.keys(list(map(fast.get_lane_id, ids)))
-        self._lane_pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, len(ids))
+        n = len(ids)
+        pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
+        prev_key = self._prev_key
+        if self._place_step == self._updates - 1 and prev_key.size == n:
+            # (a new row's key is -1: alone[-1] is False)
+            same = (pos == self._prev_pos + self._speed_now * self.dt) & lanes.alone[prev_key]
+            keys = prev_key.copy()
+            moved = np.flatnonzero(~same).tolist()
+            if moved:
+                get_lane = fast.get_lane_id
+                keys[moved] = lanes.keys([get_lane(ids[r]) for r in moved])
+        else:
+            keys = lanes.keys(list(map(fast.get_lane_id, ids)))
+        self._lane_key, self._lane_pos = keys, pos
+        self._prev_key, self._prev_pos = keys, pos.copy()  # (lane_pos is the caller's array)
+        self._place_step = self._updates
         self._where_pending = True
 
     def _derive_place(self) -> None:
@@ -492,6 +524,13 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         kept = src >= 0
         carried = np.where(kept, src, 0)
         self._route_end = np.where(kept, old_route_end[carried] if old_route_end.size else -1, -1)
+        if self._prev_key.size == old_route_end.size:  # the last places, row by row
+            old_key, old_pos = self._prev_key, self._prev_pos
+            self._prev_key = np.where(kept, old_key[carried], -1) if old_key.size else src
+            self._prev_pos = np.where(kept, old_pos[carried], np.nan) if old_pos.size else \
+                np.full(n, np.nan)  # fmt: skip
+        else:
+            self._place_step = -2
         self.speed = np.where(kept, old_speed[carried] if old_speed.size else 0.0, 0.0)
         self.last_cmd = np.full(n, np.nan)
         self._no_cmd = np.full(n, np.nan)

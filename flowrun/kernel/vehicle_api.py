@@ -180,8 +180,7 @@ class FlowVehicleGetters:
 
     def set_observed_many(self, veh_ids: Iterable[str]) -> None:
         """Mark several vehicles as observed (ids not in the network are skipped)."""
-        table = self.table
-        self._observed.update(dict.fromkeys(v for v in veh_ids if v in table))
+        self._observed.update(dict.fromkeys(filter(self.table.present, veh_ids)))
 
     def remove_observed(self, veh_id: str) -> None:
         """Unmark a vehicle as observed."""
