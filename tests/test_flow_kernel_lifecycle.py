@@ -3,6 +3,8 @@ generate the network, start SUMO (one step on the empty network, as Flow's), tea
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from flowrun.config.params import InFlows, NetParams, SumoParams, VehicleParams
@@ -66,3 +68,22 @@ def test_lifecycle_misuse_is_refused() -> None:
             k.network.length()
     finally:
         k.close()
+
+
+def test_a_template_dicts_rou_routes_are_flows_network_routes(tmp_path: Path) -> None:
+    from flowrun.networks.base import Network
+    from flowrun.networks.build import build_network
+    from tests.test_open_kernel import ToyMerge
+
+    net_file = build_network(ToyMerge("toy", VehicleParams(), NetParams()).spec, tmp_path, "t")
+    rou = tmp_path / "t.rou.xml"
+    rou.write_text(
+        '<routes>\n  <route id="main" edges="hw ce out"/>\n'
+        '  <vehicle id="v0" depart="0"><route edges="ramp ce out"/></vehicle>\n</routes>\n'
+    )
+    plain = Network("plain", VehicleParams(), NetParams(template=str(net_file)))
+    assert plain.routes["hw"] == [(["hw"], 1.0)]  # without a rou file: {start edge: [(r, p)]}
+    net = Network("t", VehicleParams(), NetParams(template={"net": str(net_file),
+                                                            "rou": str(rou)}))  # fmt: skip
+    # Flow's network.routes of a template with a rou file: that file's routes by id
+    assert net.routes == {"main": ["hw", "ce", "out"], "v0": ["ramp", "ce", "out"]}

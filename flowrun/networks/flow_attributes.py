@@ -4,7 +4,7 @@ them (``network.routes[edge]``, ``network.edge_starts``)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 
@@ -69,8 +69,15 @@ class FlowAttributes:
         return conns or None
 
     @_view
-    def routes(self) -> dict[str, list[tuple[list[str], float]]]:
-        """Flow's ``routes`` as its kernel leaves them: ``{start edge: [(edges, prob)]}``."""
+    def routes(self) -> dict[str, Any]:
+        """Flow's ``routes`` as its kernel leaves them: ``{start edge: [(edges, prob)]}``;
+        with a template dict's ``rou`` file, that file's ``{route or vehicle id: [edges]}``,
+        as Flow's network reads them (:func:`~flowrun.networks.template.rou_routes`)."""
+        template = getattr(getattr(self, "net_params", None), "template", None)
+        if isinstance(template, Mapping) and template.get("rou"):
+            from flowrun.networks.template import rou_routes
+
+            return rou_routes(template["rou"])
         starts = dict.fromkeys((*self.spec.routes, *self.spec.route_choices))
         return {e: [(list(r), float(p)) for r, p in self.spec.choices(e)] for e in starts}
 

@@ -148,6 +148,31 @@ def template_files(template: Any) -> tuple[Path, tuple[str, ...]]:
     return check_net_file(template), ()
 
 
+def rou_routes(files: Any) -> dict[str, list[str]]:
+    """The routes of route files as Flow reads a template's ``rou``: ``{id: [edges]}`` for
+    each ``<route>`` and, under the vehicle's id, each route written inside a ``<vehicle>``.
+
+    Raises:
+        ConfigError: a file is not readable XML.
+    """
+    out: dict[str, list[str]] = {}
+    for name in [files] if isinstance(files, str | os.PathLike) else files:
+        try:
+            root = ET.parse(name).getroot()
+        except (OSError, ET.ParseError) as err:
+            raise ConfigError(
+                f"cannot read rou file {str(name)!r}: {err}", path="template"
+            ) from None
+        for vehicle in root.iter("vehicle"):
+            route = vehicle.find("route")
+            if route is not None and "edges" in route.attrib:
+                out[vehicle.attrib.get("id", "")] = route.attrib["edges"].split()
+        for route in root.findall("route"):
+            if "id" in route.attrib:
+                out[route.attrib["id"]] = route.attrib.get("edges", "").split()
+    return out
+
+
 def osm_cache_dir() -> Path:
     """Where converted OSM networks are kept (content-addressed, never overwritten)."""
     base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
@@ -244,3 +269,4 @@ class TemplateNetwork(Network):
     def specify_routes(self, net_params: Any) -> Mapping[str, Any]:
         """Flow's hook: start edge -> route (or route choices); default the ``routes`` param."""
         return self.params.get("routes") or {}
+
