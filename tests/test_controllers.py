@@ -155,8 +155,9 @@ def test_bando_ftl_hand_value() -> None:
 
 def test_bando_ftl_no_leader_with_and_without_max_accel() -> None:
     inp = make_inputs([5.0], [INF])
-    # h = inf: V = v_max -> 0.5*(32 - 5) = 13.5; want_max_accel -> 2.6
-    assert accel(BandoFTLController(), inp) == pytest.approx([13.5])
+    # no leader: Flow's controller reads a gap of 1000 m and a leader speed of -1001 m/s:
+    # V = v_max -> 0.5*(32 - 5) + 20*(-1001 - 5)/1000^2 = 13.5 - 0.02012; want_max_accel -> 2.6
+    assert accel(BandoFTLController(), inp) == pytest.approx([13.47988], abs=1e-12)
     assert accel(BandoFTLController(want_max_accel=True), inp) == pytest.approx([2.6])
 
 

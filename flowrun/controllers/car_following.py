@@ -217,6 +217,10 @@ def gipps_accel(
     return (v_next - v) / dt
 
 
+#: Flow's getter values without a leader: ``get_headway`` (m) and ``get_speed(None)`` (m/s)
+FLOW_NO_LEADER_GAP, FLOW_NO_LEADER_SPEED = 1000.0, -1001.0
+
+
 def _free_road(inputs: CarFollowingInputs, accel: FloatArray) -> FloatArray:
     """Replace the command of vehicles without a leader by their maximum acceleration."""
     max_accel = inputs.max_accel if inputs.max_accel is not None else DEFAULT_MAX_ACCEL
@@ -424,8 +428,16 @@ class BandoFTLController(AccelerationController):
         self.want_max_accel = want_max_accel
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
+        h, v_lead = inputs.headway, inputs.leader_speed
+        if not self.want_max_accel and not inputs.has_leader.all():
+            # Without a leader Flow's controller reads its getters' "none" values, a gap of
+            # 1000 m and a leader speed of -1001 m/s: V = v_max and the follow-the-leader
+            # term is beta * (-1001 - v) / 1000^2 (about -0.02 m/s^2 with beta = 20)
+            alone = ~inputs.has_leader
+            h = np.where(alone, FLOW_NO_LEADER_GAP, h)
+            v_lead = np.where(alone, FLOW_NO_LEADER_SPEED, v_lead)
         accel = bando_ftl_accel(
-            inputs.speed, inputs.headway, inputs.leader_speed,
+            inputs.speed, h, v_lead,
             alpha=self.alpha, beta=self.beta, h_st=self.h_st, v_max=self.v_max,
         )  # fmt: skip
         return _free_road(inputs, accel) if self.want_max_accel else accel
