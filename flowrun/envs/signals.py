@@ -15,6 +15,8 @@ import numpy.typing as npt
 
 BoolArray = npt.NDArray[np.bool_]
 FloatArray = npt.NDArray[np.float64]
+#: per light, whether it is asked to switch (an array, or plain bools)
+SwitchRequests = BoolArray | Sequence[bool]
 
 _EDGE = re.compile(r"^(bot|top|left|right)(\d+)_(\d+)$")
 
@@ -67,7 +69,7 @@ class SwitchTimers:
         """All lights vertical green, not yellow."""
         self.packed[:] = 0.0
 
-    def step(self, switch: BoolArray) -> list[tuple[int, int, bool]]:
+    def step(self, switch: SwitchRequests) -> list[tuple[int, int, bool]]:
         """Advance one simulation step with the switch requests ``switch`` (per light).
 
         Returns:

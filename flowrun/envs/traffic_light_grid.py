@@ -15,7 +15,13 @@ from gymnasium.spaces import Box, Discrete, Tuple
 
 from flowrun.core import rewards
 from flowrun.envs.base import Env
-from flowrun.envs.signals import SwitchTimers, discrete_mask, edge_number, phase_state
+from flowrun.envs.signals import (
+    SwitchRequests,
+    SwitchTimers,
+    discrete_mask,
+    edge_number,
+    phase_state,
+)
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
 
@@ -171,7 +177,7 @@ class TrafficLightGridEnv(Env):
         return obs, info
 
     # ------------------------------------------------------------------ actions
-    def _switch_mask(self, rl_actions: Any) -> np.ndarray:
+    def _switch_mask(self, rl_actions: Any) -> SwitchRequests:
         if self.discrete:
             return discrete_mask(int(np.asarray(rl_actions).reshape(-1)[0]),
                                  self.num_traffic_lights)  # fmt: skip
@@ -180,7 +186,7 @@ class TrafficLightGridEnv(Env):
     def _apply_rl_actions(self, rl_actions: Any) -> None:
         self._update_lights(self._switch_mask(rl_actions))
 
-    def _update_lights(self, switch: np.ndarray) -> None:
+    def _update_lights(self, switch: SwitchRequests) -> None:
         self._acted = True
         set_state, ids, states = self.k.traffic_light.set_state, self.light_ids, self._phase_states
         for i, direction, yellow in self.timers.step(switch):
@@ -193,7 +199,7 @@ class TrafficLightGridEnv(Env):
 
     def _advance_timers(self) -> None:
         if not self._acted:
-            self._update_lights(np.zeros(self.num_traffic_lights, dtype=bool))
+            self._update_lights([False] * self.num_traffic_lights)
         self._acted = False
 
     def _reinsert_exiting(self) -> None:

@@ -12,6 +12,7 @@ import numpy as np
 from gymnasium.spaces import Box
 
 from flowrun.core import rewards
+from flowrun.envs import rewards as formulas
 from flowrun.envs.signals import edge_number
 from flowrun.envs.traffic_light_grid import (
     ADDITIONAL_ENV_PARAMS,
@@ -111,25 +112,30 @@ class TrafficLightGridPOEnv(TrafficLightGridEnv):
         # and observed-edge slot (-1: none)
         col, slot = self._edge_columns(vk, speeds.size)
         # the num_observed cars nearest the junction on each observed edge, edge by edge
-        # (one stable sort of all cars: by slot, then nearest first)
+        # (one stable sort of all cars: by slot, then nearest first; the cars on no observed
+        # edge, slot -1, come first and are cut off)
+        k = self.num_observed
         order = np.lexsort((-pos, slot))
         s = slot[order]
-        rank = np.arange(s.size) - np.searchsorted(s, s, side="left")
-        keep = (rank < self.num_observed) & (s >= 0)
-        rows, s = order[keep], s[keep]
-        dest = s * self.num_observed + rank[keep]
+        first = int(s.searchsorted(0))
+        order, s = order[first:], s[first:]
+        rank = np.arange(s.size) - s.searchsorted(s, side="left")
+        kept = (rank < k).nonzero()[0]
+        rows, s = order[kept], s[kept]
+        dest = s * k + rank[kept]
         # one buffer, filled part by part in the observation's order
-        per_car = self._slot_length.size * self.num_observed
-        obs = np.zeros(3 * per_car + 2 * n_edges + self.timers.packed.size)
-        obs[dest] = speeds[rows] / max_speed
-        obs[per_car + dest] = (self._slot_length[s] - pos[rows]) / self.max_dist
-        obs[2 * per_car + dest] = self._slot_num[s]
+        per_car = self._slot_length.size * k
+        at = 3 * per_car
+        obs = np.zeros(at + 2 * n_edges + self.timers.packed.size)
+        obs[:per_car][dest] = speeds[rows] / max_speed
+        obs[per_car:at][dest] = (self._slot_length[s] - pos[rows]) / self.max_dist
+        obs[2 * per_car : at][dest] = self._slot_num[s]
         ids = vk.table.ids
         self.observed_ids = [ids[r] for r in rows.tolist()]
-        at = 3 * per_car
         counts = np.bincount(col, minlength=n_edges + 1)[:n_edges]
         sums = np.bincount(col, weights=speeds, minlength=n_edges + 1)[:n_edges]
-        obs[at : at + n_edges] = VEHICLE_LENGTH * counts / self._edge_len
+        density = obs[at : at + n_edges]
+        np.divide(np.multiply(counts, VEHICLE_LENGTH, out=density), self._edge_len, out=density)
         velocity = obs[at + n_edges : at + 2 * n_edges]
         np.divide(sums, counts, out=velocity, where=counts > 0)
         velocity /= max_speed
@@ -175,10 +181,15 @@ class TrafficLightGridBenchmarkEnv(TrafficLightGridPOEnv):
     ``target_velocity`` (0 after a collision), evaluates on ``-delay``."""
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
-        """Desired velocity (``-delay`` when evaluating)."""
+        """Desired velocity (``-delay`` when evaluating): Flow's ``rewards.desired_velocity``
+        on every car, its formula called on the kernel's speeds directly."""
         if self.env_params.evaluate:
             return -rewards.min_delay_unscaled(self)
-        return rewards.desired_velocity(self, fail=bool(kwargs.get("fail", False)))
+        speeds = self.k.vehicle.speed
+        if speeds.size and speeds.min() < -100:  # Flow's guard against SUMO's error value
+            return 0.0
+        target = float(self.env_params.additional_params["target_velocity"])
+        return formulas.desired_velocity(speeds, target, fail=bool(kwargs.get("fail", False)))
 
 
 #: Flow's older name (``flow.envs.green_wave_env``).

@@ -171,7 +171,7 @@ class Population:
             self._free.extend(gone)
             mask = np.ones(n, dtype=bool)
             mask[self._row_of_slot[gone]] = False
-            kept = np.flatnonzero(mask)
+            kept = mask.nonzero()[0]  # (np.flatnonzero adds a Python layer)
             self.ids = list(compress(self.ids, mask.tolist()))  # a new list: frames keep theirs
             old_slots = self.slots[kept]
         else:
@@ -197,9 +197,12 @@ class Population:
         g = self._slot_group[self.slots]
         self.group = g
         self._types: tuple[int, list[str]] | None = None
-        self.is_rl, self.commanded, self.continuous, self.lane_controlled = self._c_flags[:, g]
+        # (take along axis 1: a third of the time of fancy indexing [:, g])
+        self.is_rl, self.commanded, self.continuous, self.lane_controlled = self._c_flags.take(
+            g, axis=1
+        )
         self.lengths, self.min_gaps, self.max_speeds, self.accels, self.decels = (
-            self._c_numbers[:, g]
+            self._c_numbers.take(g, axis=1)
         )
         self.any_continuous = bool(np.count_nonzero(self.continuous))  # .any(): a Python layer
 

@@ -357,7 +357,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             # (a new row's key is -1: alone[-1] is False)
             same = (pos == self._prev_pos + self._speed_now * self.dt) & lanes.alone[prev_key]
             keys = prev_key.copy()
-            moved = np.flatnonzero(~same).tolist()
+            moved = (~same).nonzero()[0].tolist()  # (np.flatnonzero: a Python layer)
             if moved:
                 get_lane = fast.get_lane_id
                 keys[moved] = lanes.keys([get_lane(ids[r]) for r in moved])
@@ -536,8 +536,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self._no_cmd = np.full(n, np.nan)
         self.accel_cmd = self._no_cmd.copy()
         self._all = slice(0, n)
-        self._new_rows = np.flatnonzero(~kept)
-        rows = np.flatnonzero(~kept | (self._route_end < 0))
+        self._new_rows = (~kept).nonzero()[0]
+        rows = (~kept | (self._route_end < 0)).nonzero()[0]
         get_route = self.api.vehicle.getRoute
         for r in rows.tolist():
             vid = pop.ids[r]

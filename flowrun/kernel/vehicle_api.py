@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Iterable, Sequence
-from itertools import islice
+from itertools import islice, repeat
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -180,7 +180,7 @@ class FlowVehicleGetters:
 
     def set_observed_many(self, veh_ids: Iterable[str]) -> None:
         """Mark several vehicles as observed (ids not in the network are skipped)."""
-        self._observed.update(dict.fromkeys(filter(self.table.present, veh_ids)))
+        self._observed.update(zip(filter(self.table.present, veh_ids), repeat(None)))
 
     def remove_observed(self, veh_id: str) -> None:
         """Unmark a vehicle as observed."""
