@@ -129,7 +129,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self.on_internal = np.zeros(n, dtype=bool)
         self._lane_key = np.zeros(n, dtype=np.int64)
         self._lanes: LaneTable | None = None
-        #: simulation steps read so far (``update`` calls), the step whose lanes and positions
+        #: simulation steps read so far (open networks), the step whose lanes and positions
         #: ``_prev_key`` / ``_prev_pos`` hold (rows as now), and this step's speeds: see
         #: ``_read_place``
         self._updates = 0
@@ -208,7 +208,6 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         """
         fast = self._fast
         self._accel_real = None
-        self._updates += 1
         if not self.ring_path:
             speed = self._update_open(first)
         else:
@@ -298,6 +297,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
     def _update_open(self, first: bool) -> np.ndarray:
         """Any network: follow the population, read speeds; where each car is (lane,
         position, map coordinates) and who follows whom are read when first asked."""
+        self._updates += 1
         self._follow_population(first)
         self.prev_speed = self.speed
         fast, pop = self._fast, self.table
