@@ -41,7 +41,8 @@ def merge0_config(
     driven by SUMO; 0.5 s steps, 2 per env step, 750 env steps.
     """
     vehicles = VehicleParams()
-    cf = SumoCarFollowingParams(speed_mode=MERGE_SPEED_MODE)
+    # Flow's SumoCarFollowingParams(speed_mode=9): Flow's decel and speedDev, not flowrun's
+    cf = SumoCarFollowingParams(speed_mode=MERGE_SPEED_MODE, decel=4.5, speed_dev=0.1)
     vehicles.add(
         veh_id="human",
         acceleration_controller=ControllerSpec("SimCarFollowingController"),

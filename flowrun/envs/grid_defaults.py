@@ -45,7 +45,7 @@ def grid_config(
         routing_controller=ControllerSpec("GridRouter"),
         num_vehicles=2 * cols + 2 * rows,
         car_following_params=SumoCarFollowingParams(
-            min_gap=2.5, max_speed=V_ENTER, decel=7.5, speed_mode="right_of_way"
+            min_gap=2.5, max_speed=V_ENTER, decel=7.5, speed_mode="right_of_way", speed_dev=0.1
         ),
     )
     inflows = InFlows()
