@@ -18,9 +18,10 @@ from flowrun.kernel.simulation import SimulationKernel
 from flowrun.kernel.sumo import SumoFiles, SumoProcess
 from flowrun.kernel.traffic_light import TrafficLightKernel
 from flowrun.kernel.vehicle import OpenVehicleKernel, VehicleKernel, ring_fast_path
-from flowrun.networks.base import Network
+from flowrun.networks.base import Network, TemplateVehicle
 from flowrun.networks.build import build_network
 from flowrun.networks.routes import route_name, routes_xml
+from flowrun.networks.template_demand import sumo_route_files
 from flowrun.networks.tls import write_tls_file
 
 log = logging.getLogger(__name__)
@@ -84,6 +85,7 @@ class Kernel:
             # reads 2 steps, as Flow's: signal programs and inflows keep Flow's phase.
             api.simulationStep()
             self._insert(api, table)
+            self._schedule(api, spec.departures)
         except Exception:
             self.close()
             raise
@@ -111,7 +113,10 @@ class Kernel:
         self.work_dir.mkdir(parents=True, exist_ok=True)  # a template is not built there
         routes = self.work_dir / f"{self.net_file.stem.removesuffix('.net')}.rou.xml"
         routes.write_text(routes_xml(spec, network.vehicles, network.net_params.inflows))
-        extra = tuple(Path(f) for f in spec.extra_files)  # a template's own vTypes and routes
+        extra = sumo_route_files(  # a template's route files, less what flowrun defines
+            spec.extra_files, set(network.vehicles.type_names),
+            {d.id for d in spec.departures}, self.work_dir,
+        )  # fmt: skip
         tls_file = write_tls_file(network.traffic_lights, self.net_file, self.work_dir)
         tls = () if tls_file is None else (tls_file,)
         return SumoFiles(self.net_file, routes, extra, tls)
@@ -140,6 +145,23 @@ class Kernel:
             c = table.classes[int(table.group[i])]
             v.setSpeedMode(vid, c.speed_mode)
             v.setLaneChangeMode(vid, c.lane_change_mode)
+
+    def _schedule(self, api: Any, departures: tuple[TemplateVehicle, ...]) -> None:
+        """Add a template's vehicles as Flow does at each reset: on route ``route<id>_0``,
+        departing at their time plus the reset's two steps (the clock now), lane ``first``."""
+        offset = 2 * self.sim_params.sim_step
+        for d in departures:
+            try:
+                api.route.add(f"route{d.id}_0", list(d.route))
+                api.vehicle.add(
+                    d.id, f"route{d.id}_0", typeID=d.type, depart=repr(d.depart + offset),
+                    departLane="first", departPos=d.depart_pos, departSpeed=d.depart_speed,
+                )  # fmt: skip
+            except Exception as err:  # libsumo's TraCIException: bad departPos, ...
+                raise SimulationError(
+                    f"SUMO refused the template vehicle '{d.id}' ({err}); check its "
+                    "departPos/departSpeed and route in the rou file"
+                ) from None
 
     def step(self) -> None:
         """Send buffered commands, advance one step, read the new state."""

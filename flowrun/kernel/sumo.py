@@ -46,7 +46,8 @@ def sumo_command(files: SumoFiles, params: SumoParams, gui: bool) -> list[str]:
         "--net-file",
         str(files.net),
         "--route-files",
-        ",".join(str(f) for f in (*files.extra_routes, files.routes)),
+        # flowrun's own file first: a template's <flow> may use a vType defined there
+        ",".join(str(f) for f in (files.routes, *files.extra_routes)),
         "--step-length",
         repr(float(params.sim_step)),
         "--seed",

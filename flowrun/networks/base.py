@@ -78,6 +78,27 @@ RouteChoice = tuple[tuple[str, ...], float]
 
 
 @dataclass(frozen=True)
+class TemplateVehicle:
+    """A vehicle of a template's route file, added at every reset (Flow's template vehicles).
+
+    Attributes:
+        id: vehicle id.
+        type: vehicle type id.
+        route: the edges it drives.
+        depart: departure time as written, s (it departs that long after the reset).
+        depart_pos: SUMO ``departPos`` (text, e.g. ``"12.5"`` or ``"base"``).
+        depart_speed: SUMO ``departSpeed`` (text, e.g. ``"0"`` or ``"max"``).
+    """
+
+    id: str
+    type: str
+    route: tuple[str, ...]
+    depart: float
+    depart_pos: str = "base"
+    depart_speed: str = "0"
+
+
+@dataclass(frozen=True)
 class NetworkSpec:
     """Everything SUMO needs to build the road, plus flowrun's own coordinates.
 
@@ -101,7 +122,8 @@ class NetworkSpec:
             diagrams follow it); empty means the edges in their listed order.
         net_file: an existing ``.net.xml`` to use as is (``NetParams(template=...)``) instead
             of building one from nodes and edges.
-        extra_files: further SUMO input files of a template (routes, vehicle types).
+        extra_files: further SUMO route files of a template.
+        departures: vehicles added at every reset with a departure time (a template's).
     """
 
     nodes: tuple[Node, ...]
@@ -117,6 +139,7 @@ class NetworkSpec:
     main_route: tuple[str, ...] = ()
     net_file: str | None = None
     extra_files: tuple[str, ...] = ()
+    departures: tuple[TemplateVehicle, ...] = ()
 
     def choices(self, start_edge: str) -> tuple[RouteChoice, ...]:
         """The route choices of vehicles starting on ``start_edge`` (one sure route if fixed)."""
@@ -183,6 +206,10 @@ class Network(FlowAttributes):
             from flowrun.networks.flow_hooks import lights_on_nodes
 
             self.spec = lights_on_nodes(self.spec, lights)
+        if isinstance(net_params.template, Mapping):  # Flow's {net, rou, vtype}
+            from flowrun.networks.template_demand import apply_template
+
+            self.vehicles, self.spec = apply_template(net_params.template, vehicles, self.spec)
 
     @classmethod
     def resolve_params(cls, given: dict[str, Any]) -> dict[str, Any]:

@@ -132,7 +132,11 @@ def _check_route(start: str, route: tuple[str, ...], edges: set[str],
 
 
 def template_files(template: Any) -> tuple[Path, tuple[str, ...]]:
-    """The net file and the route/vtype files of Flow's ``template`` (a path or a dict)."""
+    """The net file and the route files of Flow's ``template`` (a path or a dict).
+
+    The ``vtype`` file is checked too but not returned: its vTypes reach SUMO as vehicle
+    types of the network (:mod:`flowrun.networks.template_demand`).
+    """
     if isinstance(template, Mapping):
         if "net" not in template:
             raise ConfigError("a template dict needs a 'net' file (and optionally 'rou', "
@@ -143,7 +147,8 @@ def template_files(template: Any) -> tuple[Path, tuple[str, ...]]:
             for name in [value] if isinstance(value, str | os.PathLike) else value:
                 if not Path(name).is_file():
                     raise ConfigError(f"{key} file {str(name)!r} not found", path="template")
-                extra.append(str(name))
+                if key == "rou":
+                    extra.append(str(name))
         return check_net_file(template["net"]), tuple(extra)
     return check_net_file(template), ()
 
