@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flowrun.config import config_from_dict
 from flowrun.config.params import ControllerSpec, EnvParams, NetParams, SumoParams, VehicleParams
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network, TemplateVehicle
@@ -197,3 +198,19 @@ def test_a_users_controller_drives_the_template_vehicles_of_its_type(
         assert vk.api.vehicle.getDecel("s0") == 7.5
     finally:
         env.close()
+
+
+def test_a_yaml_inflow_may_use_a_vtype_of_the_template(net_file: Path, tmp_path: Path) -> None:
+    files = template(net_file, tmp_path)
+    data = {
+        "name": "t",
+        "network": {"type": "template", "template": files,
+                    "inflows": [{"edge": "hw", "veh_type": "fast", "vehs_per_hour": 600}]},
+        "vehicles": [],
+    }  # fmt: skip
+    assert config_from_dict(data).network.net_params.inflows.get()[0].veh_type == "fast"
+    data["network"]["inflows"][0]["veh_type"] = "fats"  # type: ignore[index]
+    with pytest.raises(
+        ConfigError, match=r"no vehicle group 'fats' \(did you mean 'fast'\?\).*: slow, fast"
+    ):
+        config_from_dict(data)

@@ -152,7 +152,7 @@ def _build(data: dict[str, Any], loc: Locations) -> ExperimentConfig:
     _check_network(cfg, loc)
     network = _build_network(cfg, loc)
     edges = None if network is None else [edge.id for edge in network.spec.edges]
-    _check_inflows(cfg, edges, loc)
+    _check_inflows(cfg, edges, loc, None if network is None else network.vehicles.type_names)
     if network is not None:
         _check_traffic_lights(cfg, network, loc)
     check_experiment(cfg, network, loc)
@@ -228,16 +228,21 @@ def _param_path(err: ConfigError, params: Mapping[str, Any]) -> KeyPath:
     return ()
 
 
-def _check_inflows(cfg: ExperimentConfig, edges: list[str] | None, loc: Locations) -> None:
+def _check_inflows(
+    cfg: ExperimentConfig, edges: list[str] | None, loc: Locations, types: list[str] | None
+) -> None:
+    """Each inflow's type and edge exist; ``types``: the network's vehicle types (the groups
+    and a template's vTypes), the groups when the network could not be built."""
     inflows = cfg.network.net_params.inflows
     if inflows is None:
         return
-    types = cfg.vehicles.type_names
+    types = cfg.vehicles.type_names if types is None else types
     for j, flow in enumerate(inflows.get()):
         if flow.veh_type not in types:
             raise loc.error(
                 f"no vehicle group '{flow.veh_type}'{did_you_mean(flow.veh_type, types)}; "
-                f"inflows use the id of a group under vehicles: {', '.join(types) or '(none)'}",
+                "inflows use the id of a group under vehicles (or of a vType of a template's "
+                f"vtype file): {', '.join(types) or '(none)'}",
                 ("network", "inflows", j, "veh_type"),
             )
     for j, flow in enumerate(inflows.get()):
