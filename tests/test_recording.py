@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -201,6 +202,13 @@ def test_text_file_is_not_a_log(tmp_path: Path) -> None:
 def test_missing_file_is_reported(tmp_path: Path) -> None:
     with pytest.raises(RecordingError, match="no such file"):
         open_log(tmp_path / "nope.mcap")
+
+
+def test_a_fifo_is_not_a_log_and_is_not_called_missing(tmp_path: Path) -> None:
+    fifo = tmp_path / "pipe.mcap"
+    os.mkfifo(fifo)  # opening it to read would block
+    with pytest.raises(RecordingError, match=r"pipe\.mcap: not a regular file"):
+        open_log(fifo)
 
 
 def test_mcap_without_flowrun_topics_is_rejected(tmp_path: Path) -> None:

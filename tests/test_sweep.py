@@ -78,6 +78,14 @@ def test_the_plan_is_the_product_of_grid_values_and_seeds(tmp_path: Path) -> Non
     assert plan_sweep(cfg, axes, 2, tmp_path, ["--steps", "9"]).folder != plan.folder
 
 
+def test_seeds_past_the_largest_seed_are_refused_before_any_run(tmp_path: Path) -> None:
+    axes = parse_grid(["network.length=230"])
+    last = load_config(SUGIYAMA, ["sim.seed=2147483646"])
+    assert plan_sweep(last, axes, 2, tmp_path).seeds == (2147483646, 2147483647)
+    with pytest.raises(ConfigError, match=r"reaches seed 2147483648.*smaller --seed or fewer"):
+        plan_sweep(last, axes, 3, tmp_path)
+
+
 def test_labels_are_safe_folder_names(tmp_path: Path) -> None:
     cfg = load_config(SUGIYAMA)
     plan = plan_sweep(cfg, parse_grid(["name=a/../b,c d"]), 1, tmp_path)

@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from flowrun.config.checks import MAX_SEED
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, FlowrunError
@@ -194,6 +195,11 @@ def plan_sweep(
     if n_seeds < 1:
         raise ConfigError(f"--seeds must be >= 1, got {n_seeds}")
     first = int(cfg.sim.seed or 0)
+    if first + n_seeds - 1 > MAX_SEED:
+        raise ConfigError(
+            f"--seeds {n_seeds} from seed {first} reaches seed {first + n_seeds - 1}, but seeds "
+            f"go up to {MAX_SEED}; use a smaller --seed or fewer --seeds"
+        )
     seeds = tuple(range(first, first + n_seeds))
     combos = itertools.product(*[[(a.key, v) for v in a.values] for a in axes])
     points = tuple(SweepPoint(tuple(c), s) for c in combos for s in seeds)

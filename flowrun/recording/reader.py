@@ -459,9 +459,8 @@ def open_log(path: str | os.PathLike[str]) -> McapLog:
     if p.is_dir():
         raise RecordingError(f"{p} is a folder; give an MCAP log in it (e.g. {p}/run_0.mcap)")
     if not p.is_file():
-        raise RecordingError(
-            f"{p}: no such file; expected an MCAP log (runs/<config>/<run>/*.mcap)"
-        )
+        what = "not a regular file" if p.exists() else "no such file"
+        raise RecordingError(f"{p}: {what}; expected an MCAP log (runs/<config>/<run>/*.mcap)")
     try:
         with open(p, "rb") as f:
             head = f.read(len(MCAP_MAGIC) + 1)
