@@ -27,9 +27,11 @@ FLOW_DEFAULT_VTYPE = {"accel": 2.6, "decel": 4.5, "sigma": 0.5, "tau": 1.0, "min
                       "impatience": 0.5}  # fmt: skip
 
 
-def flow_vtype(speed_mode: int, **changes: float) -> dict[str, Any]:
-    """Flow's vType for ``SumoCarFollowingParams(speed_mode=..., **changes)`` (SUMO names)."""
-    return {"speedMode": speed_mode, **FLOW_DEFAULT_VTYPE, **changes}
+def flow_vtype(speed_mode: int, lc_mode: int = 512, **changes: float) -> dict[str, Any]:
+    """Flow's vType for ``SumoCarFollowingParams(speed_mode=..., **changes)`` and
+    ``SumoLaneChangeParams(lane_change_mode=lc_mode)`` (SUMO's names; Flow's default lane-change
+    mode is no_lc_safe, 512)."""
+    return {"speedMode": speed_mode, "laneChangeMode": lc_mode, **FLOW_DEFAULT_VTYPE, **changes}
 
 
 # merge0/1/2.py: SumoCarFollowingParams(speed_mode=9) for humans and AVs
@@ -57,6 +59,18 @@ EXPECTED: dict[str, dict[str, dict[str, Any]]] = {
     "benchmarks/grid0": GRID,
     "benchmarks/grid1": GRID,
     "multiagent_grid": GRID,
+    # multiagent_merge.py: (speed_mode="obey_safe_speed") for humans and AVs
+    "multiagent_merge": {"human": flow_vtype(1), "rl": flow_vtype(1)},
+    "rllib_multiagent_merge": {"human": flow_vtype(1), "rl": flow_vtype(1)},
+    # non_rl/highway_ramps.py: (speed_mode="obey_safe_speed", tau=1.5), lane-change mode 1621;
+    # flowrun's documented deviation: right of way (25) at the merge
+    "highway_ramps": {"human": flow_vtype(25, 1621, tau=1.5)},
+    # non_rl/minicity.py: speed mode 1 / obey_safe_speed; flowrun's documented deviations:
+    # right of way (25) and impatience 0 at the junctions
+    "minicity": {"idm": flow_vtype(25, impatience=0.0), "rl": flow_vtype(25, impatience=0.0)},
+    # non_rl/highway.py's humans: SumoCarFollowingParams() (right_of_way); flowrun's variant
+    # adds SUMO lane changes (sumo_default) and AVs (obey_safe_speed)
+    "highway_lane_change": {"human": flow_vtype(25, 1621), "rl": flow_vtype(1)},
 }
 
 
@@ -71,12 +85,11 @@ def test_flow_mirroring_configs_build_flows_vehicle_types(name: str) -> None:
     assert {group_kind(g.veh_id) for g in groups} == set(EXPECTED[name])
     for g in groups:
         attrs = vtype_attributes(g.car_following_params, g.lane_change_params)
-        found = {"speedMode": g.car_following_params.speed_mode}
+        found = {"speedMode": g.car_following_params.speed_mode,
+                 "laneChangeMode": g.lane_change_params.lane_change_mode}  # fmt: skip
         found.update({k: float(attrs[k]) for k in FLOW_DEFAULT_VTYPE})
         assert found == EXPECTED[name][group_kind(g.veh_id)], g.veh_id
         assert (attrs["carFollowModel"], attrs["laneChangeModel"]) == ("IDM", "LC2013")
-        # Flow's default SumoLaneChangeParams(): no_lc_safe
-        assert g.lane_change_params.lane_change_mode == 512, g.veh_id
 
 
 def test_figureeight1_alternates_seven_humans_and_seven_avs() -> None:
@@ -90,3 +103,23 @@ def test_python_defaults_of_merge_and_grid_envs_build_the_configs_vehicle_types(
     assert merge0_config().vehicles == load_config(CONFIGS / "merge.yaml").vehicles
     for rows, name in ((3, "grid0"), (5, "grid1")):
         assert grid_config(rows, rows).vehicles == load_config(CONFIGS / f"{name}.yaml").vehicles
+
+
+@pytest.mark.parametrize("name", ["multiagent_merge", "rllib_multiagent_merge"])
+def test_multiagent_merge_is_flows_multiagent_merge_example(name: str) -> None:
+    # examples/exp_configs/rl/multiagent/multiagent_merge.py (EXP_NUM 0)
+    cfg = load_config(CONFIGS / f"{name}.yaml")
+    assert (cfg.sim.sim_step, cfg.env.sims_per_step, cfg.env.horizon) == (0.2, 5, 600)
+    assert cfg.env.warmup_steps == 0
+    human, rl = cfg.vehicles.groups
+    assert (human.acceleration_controller.type, human.acceleration_controller.params) == (
+        "IDM", {"noise": 0.2})  # fmt: skip
+    assert (human.num_vehicles, rl.num_vehicles, rl.acceleration_controller.type) == (
+        5, 0, "RLController")  # fmt: skip
+    inflows = cfg.network.net_params.inflows
+    assert inflows is not None
+    rates = [(f.edge, f.veh_type, f.vehs_per_hour, f.depart_lane, f.depart_speed)
+             for f in inflows.get()]  # fmt: skip
+    assert rates == [("inflow_highway", "human", 1800, "free", 10),
+                     ("inflow_highway", "rl", 200, "free", 10),
+                     ("inflow_merge", "human", 100, "free", 7.5)]  # fmt: skip

@@ -200,7 +200,7 @@ def test_policy_mapping_modes() -> None:
     assert policy_mapping(ring, agents, "agent") == {"rl_0": "rl_0", "rl_1": "rl_1"}
     merge = load_config(CONFIGS / "multiagent_merge.yaml")
     merge_agents = probe_agents(merge)
-    assert merge_agents is not None and len(merge_agents) == 43
+    assert merge_agents is not None and len(merge_agents) == 35
     groups = set(policy_mapping(merge, merge_agents, "group").values())
     assert groups == {"rl"}  # inflow AVs belong to their inflow's vehicle type
     assert probe_agents(load_config(CONFIGS / "rllib_ring.yaml")) is None
