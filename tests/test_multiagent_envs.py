@@ -340,3 +340,34 @@ def test_step_before_reset_or_for_an_unknown_agent_is_refused() -> None:
         # an agent without an action is left to SUMO for the step; the others still act
         obs, *_ = env.step({"rl_0": np.zeros(1)})
         assert sorted(obs) == ["rl_0", "rl_1"]
+
+
+def test_baseline_of_a_multiagent_config_runs_the_horizon_on_the_agents_mean_reward(
+    tmp_path: Path,
+) -> None:
+    import json
+
+    from typer.testing import CliRunner
+
+    from flowrun.cli.main import app
+
+    config = Path(__file__).resolve().parents[1] / "configs" / "multiagent_merge.yaml"
+    sets = ["env.horizon=30"]
+    env = make_env(load_config(config, sets))
+    try:
+        env.reset(seed=0)
+        expected = 0.0
+        for _ in range(30):
+            _, rewards, *_ = env.step(None)
+            expected += float(np.mean(list(rewards.values()))) if rewards else 0.0
+    finally:
+        env.close()
+    args = ["baseline", str(config), "--out", str(tmp_path), "--no-record", "--seed", "0"]
+    result = CliRunner().invoke(app, [*args, "--set", sets[0]])
+    assert result.exit_code == 0, result.output
+    (metrics,) = tmp_path.glob("multiagent_merge/*/metrics.json")
+    (run,) = json.loads(metrics.read_text())["runs"]
+    assert expected > 0
+    assert run["episode_return"] == pytest.approx(expected, rel=1e-12)
+    # the whole horizon (30 env steps of 5 x 0.2 s) after the 2 steps of the reset
+    assert run["duration"] == pytest.approx(30 * 5 * 0.2 + 2 * 0.2)

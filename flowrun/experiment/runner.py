@@ -16,6 +16,7 @@ from flowrun.envs.base import Env
 from flowrun.envs.frames import batch_stats
 from flowrun.errors import ConfigError
 from flowrun.experiment.metrics import RunAccumulator, RunMetrics
+from flowrun.multiagent.joint import joint_view
 from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
 
 log = logging.getLogger(__name__)
@@ -142,7 +143,7 @@ class Experiment:
         if callable(num_steps):
             num_steps, rl_actions = None, num_steps
         steps = self._steps(num_steps)
-        env = self.env
+        env = joint_view(self.env)  # a multi-agent env: joint dicts, mean reward, its end
         sink_factory = self.sink_factory
         if convert_to_csv and sink_factory is None:
             sink_factory = self._csv_sinks()

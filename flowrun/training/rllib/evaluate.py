@@ -20,6 +20,7 @@ import numpy as np
 
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, TrainingError
+from flowrun.multiagent.joint import joint_view
 from flowrun.training.evaluate import (
     EvalProgress,
     EvalResult,
@@ -102,34 +103,6 @@ def load_policies(checkpoint: Path, deterministic: bool = True) -> dict[str, Mod
     return {str(mid): ModulePolicy(multi[mid], deterministic) for mid in list(multi.keys())}
 
 
-class JointView:
-    """A flowrun multi-agent env as :class:`Experiment` steps it: joint observation and action
-    dicts, the mean of the agents' rewards, the episode's end from ``episode_over``."""
-
-    def __init__(self, env: Any) -> None:
-        object.__setattr__(self, "_env", env)
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._env, name)
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        setattr(self._env, name, value)
-
-    def reset(self, seed: int | None = None, options: dict[str, Any] | None = None) -> Any:
-        """Reset the env."""
-        return self._env.reset(seed=seed, options=options)
-
-    def step(self, actions: dict[str, Any] | None) -> tuple[Any, float, bool, bool, Any]:
-        """One step; ``None`` (the baseline) sends no action."""
-        env = self._env
-        obs, rewards, _, _, infos = env.step(actions or {})
-        reward = float(np.mean(list(rewards.values()))) if rewards else 0.0
-        over = bool(env.episode_over)
-        crash = any(bool(i.get("crash")) for i in infos.values())
-        terminated = over and (crash or env.step_counter < env.env_params.horizon)
-        return obs, reward, terminated, over and not terminated, infos
-
-
 def evaluate_rllib(
     run_dir: Path,
     episodes: int = 1,
@@ -172,12 +145,9 @@ def evaluate_rllib(
     policies = load_policies(path, deterministic)
     act = _actor(cfg, run_dir, tc.policies, policies)
 
-    def joint(env: Any) -> Any:
-        return JointView(env) if getattr(env, "episode_over", None) is not None else env
-
     head = {"deterministic": deterministic, "backend": "rllib"}
     return run_evaluation(cfg, run_dir, path, run_state(run_dir), head, act, episodes,
-                          progress, out, wrap=joint, should_stop=should_stop)  # fmt: skip
+                          progress, out, wrap=joint_view, should_stop=should_stop)  # fmt: skip
 
 
 def _actor(
