@@ -138,6 +138,9 @@ def test_baseline_has_no_av_and_evaluates(name: str) -> None:
         group = cfg.vehicles.groups[0]
         assert group.acceleration_controller.params["noise"] == 0.2
         assert group.car_following_params.speed_mode == 1
+        # Flow's SumoCarFollowingParams(speed_mode="obey_safe_speed"): its default vType
+        assert group.car_following_params.decel == 4.5
+        assert group.car_following_params.speed_dev == 0.1
 
 
 def test_select_takes_all_families_and_names_in_flows_order() -> None:

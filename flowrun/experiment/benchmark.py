@@ -6,7 +6,8 @@ baseline derived from it by ``--set`` overrides, as Flow's ``flow/benchmarks/bas
 scripts define it:
 
 * figure eight (``baselines/figureeight012.py``): 14 noisy IDM drivers (noise 0.2, speed mode
-  1, SUMO's default decel) and no AV, the same for figureeight0/1/2;
+  1, Flow's default vehicle type: decel 4.5, speedDev 0.1) and no AV, the same for
+  figureeight0/1/2;
 * merge (``baselines/merge012.py``): no AVs, all 2,000 veh/h of the highway human (the ramp's
   100 veh/h as before);
 * grid (``baselines/grid0.py``, ``grid1.py``): the same cars, SUMO's actuated lights;
@@ -39,7 +40,8 @@ FAMILIES = ("figureeight", "merge", "grid", "bottleneck")
 
 _FIG8_HUMANS = (
     "vehicles=[{id: human, count: 14, acceleration_controller: {type: IDM, noise: 0.2}, "
-    "routing_controller: {type: ContinuousRouter}, car_following: {speed_mode: obey_safe_speed}}]"
+    "routing_controller: {type: ContinuousRouter}, car_following: {speed_mode: obey_safe_speed, "
+    "decel: 4.5, speed_dev: 0.1}}]"
 )
 _MERGE_HUMANS = (
     "network.inflows=[{edge: inflow_highway, veh_type: human, vehs_per_hour: 2000, "
