@@ -1,6 +1,6 @@
 """Step cost of the grid benchmarks (grid0 3x3, grid1 5x5) against SUMO alone, in one run.
 
-Usage: ``.venv/bin/python bench/grid.py [steps] [repeats]`` (400 and 3 by default).
+Usage: ``.venv/bin/python bench/grid.py [steps] [repeats]`` (400 and 9 by default).
 
 For each network: a first env run (not timed) logs what the env tells SUMO (signal states
 per step, the modes of entering cars; ``bench/grid_steps.py``); SUMO alone replaying that log
@@ -8,7 +8,9 @@ must hold the same number of cars at every step (checked: "same traffic"). Then 
 (``TrafficLightGridBenchmarkEnv``, seeded random switch actions, one episode of ``steps``
 steps, no reset inside the timing) and the replay take turns ``repeats`` times, each from the
 same reset. Times are this process's CPU time (``time.process_time``: time spent waiting
-for a core on a busy machine is not counted), median of the repeats, µs per step.
+for a core on a busy machine is not counted), µs per step: the median of the repeats (and
+"min": the ratio of the fastest runs, the least disturbed by other work; single runs of a
+few hundred ms on a shared 2-core machine scatter by +-30 %).
 
 Before this bench replayed the env's traffic, SUMO alone ran its own programs without the
 signal file (other traffic: grid0 65 cars on average against the env's 62) and the env's
@@ -53,7 +55,7 @@ def raw_us(name: str, steps: int, log: object) -> float:
 
 def main() -> None:
     steps = int(sys.argv[1]) if len(sys.argv) > 1 else 400
-    repeats = int(sys.argv[2]) if len(sys.argv) > 2 else 3
+    repeats = int(sys.argv[2]) if len(sys.argv) > 2 else 9
     print(f"load before: {os.getloadavg()[0]:.2f}")
     for name in GRIDS:
         log = record(name, steps)
@@ -64,10 +66,11 @@ def main() -> None:
         runs = [(env_us(name, steps), raw_us(name, steps, log)) for _ in range(repeats)]
         e = statistics.median(r[0] for r in runs)
         r = statistics.median(r[1] for r in runs)
+        fastest = min(r[0] for r in runs) / min(r[1] for r in runs)
         cars = sum(log.counts) / steps
         print(f"{name}: env {e:6.0f} us/step  SUMO alone {r:6.0f} us/step  ratio {e / r:5.2f}  "
-              f"(ratios {', '.join(f'{a / b:.2f}' for a, b in runs)})  mean cars {cars:.0f}  "
-              f"same traffic: {'yes' if same else 'NO'}")  # fmt: skip
+              f"(min {fastest:.2f}; runs {', '.join(f'{a / b:.2f}' for a, b in runs)})  "
+              f"mean cars {cars:.0f}  same traffic: {'yes' if same else 'NO'}")  # fmt: skip
     print(f"load after: {os.getloadavg()[0]:.2f}")
 
 
