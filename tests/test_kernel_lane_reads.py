@@ -83,3 +83,24 @@ def test_multi_lane_cars_are_always_read() -> None:
     finally:
         env.close()
     assert compared > 0 and reads > 0
+
+
+@pytest.mark.sumo
+def test_a_step_the_kernel_did_not_read_makes_it_read_every_lane() -> None:
+    cfg = load_config(CONFIGS / "grid0.yaml", ["env.horizon=100"])
+    env = make_env(cfg)
+    try:
+        env.reset(seed=0)
+        for _ in range(50):
+            env.step(None)
+        vk = env.k.vehicle
+        calls = count_lane_reads(env)
+        env.step(None)
+        assert calls[0] < vk.num_vehicles // 2  # the usual step: few cars read, if any
+        env.k.simulation.simulation_step()  # a SUMO step with no kernel update after it
+        env.k.step()
+        calls[0] = 0
+        vk.edges  # noqa: B018 - reading the lanes is what is measured
+        assert calls[0] == vk.num_vehicles  # positions two steps old prove nothing
+    finally:
+        env.close()

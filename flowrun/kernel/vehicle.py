@@ -30,6 +30,7 @@ from flowrun.networks.base import NetworkSpec
 _flatten = chain.from_iterable
 
 _NO_ROWS = np.zeros(0, dtype=np.int64)
+_NEVER = -(10**18)  # a clock no step has
 
 
 
@@ -129,11 +130,12 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self.on_internal = np.zeros(n, dtype=bool)
         self._lane_key = np.zeros(n, dtype=np.int64)
         self._lanes: LaneTable | None = None
-        #: simulation steps read so far (open networks), the step whose lanes and positions
-        #: ``_prev_key`` / ``_prev_pos`` hold (rows as now), and this step's speeds: see
-        #: ``_read_place``
-        self._updates = 0
-        self._place_step = -2
+        #: SUMO's clock (ms) at this update (open networks), the clock of the step whose lanes
+        #: and positions ``_prev_key`` / ``_prev_pos`` hold (rows as now), the step length
+        #: (ms) and this step's speeds: see ``_read_place``
+        self._now_ms = 0
+        self._place_ms = _NEVER
+        self._step_ms = round(dt * 1000)
         self._prev_key = _NO_ROWS
         self._prev_pos = np.zeros(0)
         self._speed_now = np.zeros(0)
@@ -297,7 +299,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
     def _update_open(self, first: bool) -> np.ndarray:
         """Any network: follow the population, read speeds; where each car is (lane,
         position, map coordinates) and who follows whom are read when first asked."""
-        self._updates += 1
+        self._now_ms = round(self._fast.sim_time() * 1000)
         self._follow_population(first)
         self.prev_speed = self.speed
         fast, pop = self._fast, self.table
@@ -341,11 +343,13 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         derived when first asked (:meth:`_derive_place`).
 
         The lane id is asked of SUMO only for the cars that may have changed lanes. Where the
-        last step's places were read, a car on the only lane of its edge whose position grew
-        by exactly ``speed * dt`` (SUMO's Euler step, bit for bit) is on the same lane: had it
-        passed onto the next lane, its position would have lost that lane's length, and it
-        cannot change lanes sideways. Any other car (entered, on a multi-lane edge, crossing
-        a lane's end, teleported, moved by a command, or any step method but Euler) is read.
+        places of the step just before were read (by SUMO's clock: after a step nobody asked
+        about, or one taken around the kernel, all are read), a car on the only lane of its
+        edge whose position grew by exactly ``speed * dt`` (SUMO's Euler step, bit for bit)
+        is on the same lane: had it passed onto the next lane, its position would have lost
+        that lane's length, and it cannot change lanes sideways. Any other car (entered, on a
+        multi-lane edge, crossing a lane's end, teleported, moved by a command, or any step
+        method but Euler) is read.
         """
         self._place_pending = False
         fast, lanes, ids = self._fast, self._lanes, self.table.ids
@@ -353,7 +357,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         n = len(ids)
         pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
         prev_key = self._prev_key
-        if self._place_step == self._updates - 1 and prev_key.size == n:
+        if self._place_ms == self._now_ms - self._step_ms and prev_key.size == n:
             # (a new row's key is -1: alone[-1] is False)
             same = (pos == self._prev_pos + self._speed_now * self.dt) & lanes.alone[prev_key]
             keys = prev_key.copy()
@@ -365,7 +369,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             keys = lanes.keys(list(map(fast.get_lane_id, ids)))
         self._lane_key, self._lane_pos = keys, pos
         self._prev_key, self._prev_pos = keys, pos.copy()  # (lane_pos is the caller's array)
-        self._place_step = self._updates
+        self._place_ms = self._now_ms
         self._where_pending = True
 
     def _derive_place(self) -> None:
@@ -530,7 +534,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             self._prev_pos = np.where(kept, old_pos[carried], np.nan) if old_pos.size else \
                 np.full(n, np.nan)  # fmt: skip
         else:
-            self._place_step = -2
+            self._place_ms = _NEVER
         self.speed = np.where(kept, old_speed[carried] if old_speed.size else 0.0, 0.0)
         self.last_cmd = np.full(n, np.nan)
         self._no_cmd = np.full(n, np.nan)
