@@ -214,3 +214,22 @@ def test_a_yaml_inflow_may_use_a_vtype_of_the_template(net_file: Path, tmp_path:
         ConfigError, match=r"no vehicle group 'fats' \(did you mean 'fast'\?\).*: slow, fast"
     ):
         config_from_dict(data)
+
+
+@pytest.mark.sumo
+def test_a_car_sumo_inserts_in_the_resets_first_step_joins_the_kernel(
+    net_file: Path, tmp_path: Path
+) -> None:
+    rou = ROUTES.replace('begin="5"', 'begin="0"')  # its first car departs in the empty step
+    net = Network("t", VehicleParams(), NetParams(template=template(net_file, tmp_path, rou)))
+    env = Drive(EnvParams(horizon=10**6), SumoParams(sim_step=0.5, seed=0), net)
+    try:
+        env.reset(seed=0)
+        vk = env.k.vehicle
+        assert "fl.0" in vk.api.vehicle.getIDList()
+        assert vk.get_ids() == ["fl.0"]  # on the road at reset, so in the kernel too
+        assert vk.get_type("fl.0") == "fast" and vk.get_speed("fl.0") >= 0
+        env.step(None)
+        assert sorted(vk.get_ids()) == ["d0", "f0", "fl.0"]
+    finally:
+        env.close()

@@ -228,9 +228,10 @@ class OpenRoadReads:
         """Add the cars SUMO inserted, drop those that arrived (or were removed)."""
         fast, pop = self._fast, self.table
         if first:
-            # Flow's reset counts no departure, but a car an inflow inserted in the insertion
-            # step (1 s steps, inflows from 1 s) is on the road: it joins, as in Flow's update
-            entered = [vid for vid in fast.departed_ids() if vid not in pop]
+            # Flow's reset counts no departure, but a car SUMO inserted during the reset's two
+            # steps (an inflow from 1 s at 1 s steps, a template's <flow begin="0">) is on the
+            # road: it joins, as in Flow's update
+            entered = [vid for vid in self.api.vehicle.getIDList() if vid not in pop]
             departed: list[str] = []
             arrived: list[str] = []
         else:
