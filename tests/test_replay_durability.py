@@ -69,7 +69,8 @@ def test_a_window_outside_the_log_and_wrong_paths_are_clear_errors(
     assert "no logged step within --from 1e+300 s" in _one_error(
         _replay(sumo_log, "--from", "1e300")
     )
-    assert "the log covers 0.1-" in _one_error(_replay(sumo_log, "--to", "-5"))
+    # the first frame is the state after reset: 2 steps of 0.1 s (Flow's reset clock)
+    assert "the log covers 0.2-" in _one_error(_replay(sumo_log, "--to", "-5"))
     assert "is a folder" in _one_error(_replay(sumo_log.parent))
     message = _one_error(_replay(sumo_log, "--plot", "speed", "--out", sumo_log))
     assert "is a file; give a folder" in message
