@@ -78,6 +78,9 @@ def test_stop_request_gives_up_the_evaluation() -> None:
 
     runner = NumpyEpisodeRunner(load_config(RING, SHORT), [1], stop)
     assert runner.run(feedback_policy, None) is None
+    # asked to stop during the all-human baseline: one unknown baseline per seed
+    stopped = NumpyEpisodeRunner(load_config(RING, SHORT), [1, 2], lambda: True)
+    assert len(stopped.baseline) == 2 and all(np.isnan(stopped.baseline))
 
 
 def test_a_config_the_numpy_rings_cannot_run_is_refused_at_eval_backend() -> None:

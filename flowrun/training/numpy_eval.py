@@ -70,7 +70,7 @@ class NumpyEpisodeRunner:
 
         self.seeds = tuple(seeds)
         self.should_stop = should_stop
-        self._starts: dict[int, FastRings] = {}
+        self._start: FastRings | None = None
         self.plan = numpy_eval_plan(cfg)
         spread = hasattr(env_class(cfg), "evaluation_options") and self.plan.bounds is not None
         self.lengths: list[float | None] = (
@@ -83,8 +83,9 @@ class NumpyEpisodeRunner:
         except ConfigError:  # no human group to copy: scores fall back to returns
             self.baseline = [math.nan] * len(self.seeds)
         else:
-            runs = self._play(human, None, None)
-            self.baseline = [math.nan if runs is None else r.last_half_speed for r in runs or []]
+            runs = self._play(human, None, None)  # None: asked to stop (run() gives up too)
+            nan = [math.nan] * len(self.seeds)
+            self.baseline = nan if runs is None else [r.last_half_speed for r in runs]
 
     def score(self, scores: Sequence[EpisodeScore]) -> float:
         """As :meth:`EpisodeRunner.score`."""
@@ -99,15 +100,16 @@ class NumpyEpisodeRunner:
 
     def _warmed_up(self, plan: RingPlan) -> FastRings:
         """The rings of every seed's episode after its reset and warm-up (which no policy
-        acts in): made once per plan, then copied for each evaluation."""
-        key = id(plan)
-        if key not in self._starts:
-            b = len(self.seeds)
-            rings = FastRings(plan, b)
-            rings.reset(np.arange(b), list(self.seeds), self.lengths)
-            self._starts[key] = rings
-        start = self._starts[key]
-        return copy.deepcopy(start, memo={id(start.plan): start.plan})
+        acts in); for the policy's plan made once, then copied for each evaluation."""
+        if plan is self.plan and self._start is not None:
+            return copy.deepcopy(self._start, memo={id(plan): plan})
+        b = len(self.seeds)
+        rings = FastRings(plan, b)
+        rings.reset(np.arange(b), list(self.seeds), self.lengths)
+        if plan is not self.plan:
+            return rings
+        self._start = rings
+        return copy.deepcopy(rings, memo={id(plan): plan})
 
     def _play(
         self,
