@@ -25,7 +25,7 @@ import numpy as np
 
 from flowrun.config.loader import load_config
 from flowrun.config.params import is_rl
-from flowrun.controllers.car_following import idm_accel
+from flowrun.controllers.car_following_formulas import idm_accel
 
 FLOWRUN = str(Path(sys.executable).with_name("flowrun"))
 LENGTHS = (230, 260)

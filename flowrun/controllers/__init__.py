@@ -25,6 +25,8 @@ from flowrun.controllers.car_following import (
     LACController,
     LinearOVM,
     OVMController,
+)
+from flowrun.controllers.car_following_formulas import (
     bando_ftl_accel,
     bcm_accel,
     cfm_accel,
