@@ -37,9 +37,7 @@ from flowrun.controllers.car_following_formulas import (
     linear_ovm_accel,
     ovm_accel,
 )
-
-#: Flow's getter values without a leader: ``get_headway`` (m) and ``get_speed(None)`` (m/s)
-FLOW_NO_LEADER_GAP, FLOW_NO_LEADER_SPEED = 1000.0, -1001.0
+from flowrun.flow_values import FLOW_ERROR, FLOW_NO_GAP
 
 
 def _free_road(inputs: CarFollowingInputs, accel: FloatArray) -> FloatArray:
@@ -255,8 +253,8 @@ class BandoFTLController(AccelerationController):
             # 1000 m and a leader speed of -1001 m/s: V = v_max and the follow-the-leader
             # term is beta * (-1001 - v) / 1000^2 (about -0.02 m/s^2 with beta = 20)
             alone = ~inputs.has_leader
-            h = np.where(alone, FLOW_NO_LEADER_GAP, h)
-            v_lead = np.where(alone, FLOW_NO_LEADER_SPEED, v_lead)
+            h = np.where(alone, FLOW_NO_GAP, h)
+            v_lead = np.where(alone, FLOW_ERROR, v_lead)
         accel = bando_ftl_accel(
             inputs.speed, h, v_lead,
             alpha=self.alpha, beta=self.beta, h_st=self.h_st, v_max=self.v_max,

@@ -21,6 +21,7 @@ from flowrun.envs.base import Env
 from flowrun.envs.frames import network_metadata
 from flowrun.errors import ConfigError
 from flowrun.experiment.rundir import unique_dir
+from flowrun.flow_values import FLOW_ERROR, FLOW_NO_GAP
 from flowrun.recording.writer import McapRecorder
 
 log = logging.getLogger(__name__)
@@ -47,8 +48,6 @@ FLOW_EMISSION_COLUMNS = (
     "follower_id",
     "leader_rel_speed",
 )
-#: Flow's headway without a leader (m) and its speed of "no vehicle" (m/s).
-NO_LEADER_GAP, NO_VEHICLE_SPEED = 1000.0, -1001.0
 
 
 def emission_dir(env: Env, name: str) -> Path:
@@ -130,10 +129,10 @@ def flow_emission_csv(mcap_path: Path, out: Path, sim_step: float) -> int:
             headway = float(frame.headway[i])
             rows.setdefault(vid, []).append([
                 t, vid, float(frame.x[i]), float(frame.y[i]), speed,
-                NO_LEADER_GAP if math.isinf(headway) else headway, leader,
+                FLOW_NO_GAP if math.isinf(headway) else headway, leader,
                 target, target, target, target, real, 0, frame.edges[i], int(frame.lanes[i]),
                 float(frame.odometer[i]), float(frame.lane_pos[i]), follower[i],
-                (float(frame.speed[j]) if j is not None else NO_VEHICLE_SPEED) - speed,
+                (float(frame.speed[j]) if j is not None else FLOW_ERROR) - speed,
             ])  # fmt: skip
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.{os.getpid()}.partial")

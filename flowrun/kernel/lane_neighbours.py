@@ -25,11 +25,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from flowrun.flow_values import FLOW_NO_GAP
+
 if TYPE_CHECKING:
     from flowrun.kernel.network import NetworkKernel
 
 #: Flow's gap (m) to a lane's leader or follower when there is none.
-NO_NEIGHBOUR_GAP = 1000.0
+NO_NEIGHBOUR_GAP = FLOW_NO_GAP
 
 LaneStep = Callable[[str, int], list[tuple[str, int]]]
 

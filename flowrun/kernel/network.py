@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from flowrun.config.params import InitialConfig, VehicleParams
+from flowrun.flow_values import FLOW_ERROR
 from flowrun.kernel.lanes import LaneTable
 from flowrun.networks.base import Network, NetworkSpec
 
@@ -82,7 +83,7 @@ class NetworkKernel:
         if edge_id in self._edges:
             return self._edges[edge_id].length
         facts = self._facts(edge_id)
-        return -1001.0 if facts is None else facts[1]
+        return FLOW_ERROR if facts is None else facts[1]
 
     def _facts(self, edge_id: str) -> tuple[int, float, float] | None:
         """(lanes, length, speed limit) of an edge SUMO built (junction-internal ones too)."""
@@ -101,14 +102,14 @@ class NetworkKernel:
         if edge_id in self._edges:
             return self._edges[edge_id].lanes
         facts = self._facts(edge_id)
-        return -1001 if facts is None else facts[0]
+        return int(FLOW_ERROR) if facts is None else facts[0]
 
     def speed_limit(self, edge_id: str) -> float:
         """Speed limit of an edge, m/s (-1001 for an unknown edge, as Flow)."""
         if edge_id in self._edges:
             return self._edges[edge_id].speed
         facts = self._facts(edge_id)
-        return -1001.0 if facts is None else facts[2]
+        return FLOW_ERROR if facts is None else facts[2]
 
     def next_edge(self, edge: str, lane: int) -> list[tuple[str, int]]:
         """The (edge, lane) pairs lane ``lane`` of ``edge`` leads to (empty if none/unknown).
@@ -157,7 +158,7 @@ class NetworkKernel:
         if start is None and edge.startswith(":"):
             start = self._edge_starts.get(f"{edge}_0")
         if start is None:
-            return -1001.0
+            return FLOW_ERROR
         return start + position
 
     def get_edge(self, x: float) -> tuple[str, float]:

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from flowrun.flow_values import FLOW_ERROR
 from flowrun.kernel.lane_neighbours import (
     NO_NEIGHBOUR_GAP,
     LaneGraphView,
@@ -27,7 +28,7 @@ if TYPE_CHECKING:
     from flowrun.networks.base import NetworkSpec
 
 #: Flow's value for "no such vehicle" in numeric getters.
-ERROR = -1001.0
+ERROR = FLOW_ERROR
 
 #: Flow's vehicle colours (red, green, blue).
 RED, CYAN, WHITE = (255, 0, 0), (0, 255, 255), (255, 255, 255)

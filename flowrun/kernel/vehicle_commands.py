@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from flowrun.kernel.vehicle_api import without_removed
+from flowrun.kernel.vehicle_api import ERROR, without_removed
 
 if TYPE_CHECKING:
     from flowrun.kernel.lanes import LaneTable
@@ -33,7 +33,6 @@ SLOW_DOWN_DURATION = 1e-3
 #: ``changeLane`` duration, s: Flow's, so a commanded car keeps its new lane
 LANE_CHANGE_HOLD = 100000.0
 #: Flow's value for "no such vehicle" (``get_last_lc`` of an unknown or non-RL car)
-ERROR = -1001.0
 
 
 class LaneChangeLog:

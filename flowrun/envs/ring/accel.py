@@ -13,6 +13,7 @@ from gymnasium.spaces import Box
 
 from flowrun.envs.base import Env
 from flowrun.envs.rewards import desired_velocity
+from flowrun.flow_values import FLOW_ERROR
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     # maximum acceleration of the RL cars, m/s^2
@@ -200,7 +201,9 @@ class AccelEnv(RingAccelBase):
         vk = self.k.vehicle
         positions: AbsolutePositions | None = getattr(self, "_positions", None)
         if positions is not None and positions.current(vk):
-            return float(positions.value[vk.table.row(veh_id)]) if veh_id in vk.table else -1001.0
+            if veh_id not in vk.table:
+                return FLOW_ERROR
+            return float(positions.value[vk.table.row(veh_id)])
         return float(vk.get_x_by_id(veh_id)) % self.k.network.length()
 
     @property
