@@ -23,7 +23,7 @@ from flowrun.errors import ConfigError
 from flowrun.fastring.plan import RingPlan, ring_plan
 from flowrun.fastring.rings import FastRings
 from flowrun.fastring.tasks import RingTask
-from flowrun.training.periodic_eval import Act, EpisodeScore, relative_worst
+from flowrun.training.periodic_eval import Act, Episodes, EpisodeScore
 
 EVAL_BACKEND_PATH = "train.eval_backend"
 
@@ -48,7 +48,7 @@ def numpy_eval_plan(cfg: ExperimentConfig) -> RingPlan:
         ) from None
 
 
-class NumpyEpisodeRunner:
+class NumpyEpisodeRunner(Episodes):
     """:class:`~flowrun.training.periodic_eval.EpisodeRunner`'s episodes on numpy rings."""
 
     def __init__(
@@ -57,27 +57,20 @@ class NumpyEpisodeRunner:
         seeds: Sequence[int],
         should_stop: Callable[[], bool] | None = None,
     ) -> None:
-        """Plan ``cfg`` (evaluation mode is set here) and run the all-human baseline.
-
-        Args:
-            cfg: the training config.
-            seeds: one episode per seed, at every evaluation.
-            should_stop: polled every step; once true, :meth:`run` gives up.
-        """
+        """Plan ``cfg`` (evaluation mode is set here) and run the all-human baseline; see
+        :class:`~flowrun.training.periodic_eval.Episodes` for the other arguments."""
         from flowrun.envs.factory import env_class
         from flowrun.envs.ring.wave_attenuation import spread_lengths
         from flowrun.training.evaluate import all_human
 
-        self.seeds = tuple(seeds)
-        self.should_stop = should_stop
+        super().__init__(seeds, should_stop)
         self._start: FastRings | None = None
         self.plan = numpy_eval_plan(cfg)
-        spread = hasattr(env_class(cfg), "evaluation_options") and self.plan.bounds is not None
-        self.lengths: list[float | None] = (
-            [float(x) for x in spread_lengths(self.plan.bounds, len(self.seeds))]
-            if spread and self.plan.bounds is not None
-            else [None] * len(self.seeds)
-        )
+        # spread over the drawn lengths as the SUMO env's evaluation_options spreads them
+        bounds, n = self.plan.bounds, len(self.seeds)
+        self.lengths: list[float | None] = [None] * n
+        if bounds is not None and hasattr(env_class(cfg), "evaluation_options"):
+            self.lengths = [float(x) for x in spread_lengths(bounds, n)]
         try:
             human = numpy_eval_plan(all_human(cfg))
         except ConfigError:  # no human group to copy: scores fall back to returns
@@ -86,10 +79,6 @@ class NumpyEpisodeRunner:
             runs = self._play(human, None, None)  # None: asked to stop (run() gives up too)
             nan = [math.nan] * len(self.seeds)
             self.baseline = nan if runs is None else [r.last_half_speed for r in runs]
-
-    def score(self, scores: Sequence[EpisodeScore]) -> float:
-        """As :meth:`EpisodeRunner.score`."""
-        return relative_worst(scores, self.baseline)
 
     def run(
         self, act: Act, normalize: Callable[[np.ndarray], np.ndarray] | None
@@ -149,6 +138,3 @@ class NumpyEpisodeRunner:
             half = speeds[n // 2 : n, i]
             scores.append(EpisodeScore(float(total[i]), n, float(np.mean(half))))
         return scores
-
-    def close(self) -> None:
-        """Nothing to release (no simulator)."""

@@ -23,7 +23,7 @@ import zipfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -124,24 +124,50 @@ class EpisodeScore:
     last_half_speed: float
 
 
-class Episodes(Protocol):
-    """The evaluation episodes of a run: :class:`EpisodeRunner` (SUMO) or
-    :class:`~flowrun.training.numpy_eval.NumpyEpisodeRunner`."""
+class Episodes:
+    """The evaluation episodes of a run, reset with the same seeds at every evaluation and
+    ranked against the all-human baseline of the same episodes: :class:`EpisodeRunner`
+    (SUMO) or :class:`~flowrun.training.numpy_eval.NumpyEpisodeRunner`.
+
+    Args:
+        seeds: one episode per seed, at every evaluation.
+        should_stop: polled every step; once true, :meth:`run` gives up.
+
+    Attributes:
+        baseline: each seed's all-human last-half mean speed, m/s (``nan`` when unknown);
+            set by the subclass.
+    """
+
+    baseline: list[float]
+
+    def __init__(self, seeds: Sequence[int], should_stop: Callable[[], bool] | None) -> None:
+        self.seeds = tuple(seeds)
+        self.should_stop = should_stop
 
     def score(self, scores: Sequence[EpisodeScore]) -> float:
-        """The number that ranks a policy (higher is better)."""
+        """What picks the best model: the worst episode's last-half mean speed as a fraction of
+        the all-human baseline's on the same seed (rings of different lengths then count
+        alike, and a policy must be good on every one of them: the mean let a policy that
+        stops the AV on short rings win on its long ones). The mean return when the env
+        reports no speeds."""
+        ratios = [s.last_half_speed / b for s, b in zip(scores, self.baseline, strict=True)]
+        if all(math.isfinite(r) for r in ratios) and all(b > 0 for b in self.baseline):
+            return float(min(ratios))
+        return float(np.mean([s.episode_return for s in scores]))
 
     def run(
         self, act: Act, normalize: Callable[[np.ndarray], np.ndarray] | None
     ) -> list[EpisodeScore] | None:
-        """One episode per seed with the policy; ``None`` when asked to stop."""
+        """One episode per seed with the policy (observations normalised first); ``None``
+        when ``should_stop`` became true on the way."""
+        raise NotImplementedError
 
     def close(self) -> None:
-        """Release the simulation (idempotent)."""
+        """Release the simulation, if any (idempotent)."""
 
 
-class EpisodeRunner:
-    """The evaluation env in this process, reset with the same seeds at every evaluation."""
+class EpisodeRunner(Episodes):
+    """The evaluation env in this process (SUMO)."""
 
     def __init__(
         self,
@@ -149,17 +175,11 @@ class EpisodeRunner:
         seeds: Sequence[int],
         should_stop: Callable[[], bool] | None = None,
     ) -> None:
-        """Build the env of ``cfg`` (evaluation mode is the caller's choice).
-
-        Args:
-            cfg: the evaluation config.
-            seeds: one episode per seed, at every evaluation.
-            should_stop: polled every step; once true, :meth:`run` gives up.
-        """
+        """Build the env of ``cfg`` (evaluation mode is the caller's choice); see
+        :class:`Episodes` for the other arguments."""
         from flowrun.envs.factory import make_env
 
-        self.seeds = tuple(seeds)
-        self.should_stop = should_stop
+        super().__init__(seeds, should_stop)
         self.baseline = self._baseline(cfg)
         self.env = make_env(cfg)  # after the baseline's env is closed: one SUMO a process
         self.options = _spread_options(self.env, len(self.seeds))
@@ -184,14 +204,6 @@ class EpisodeRunner:
         finally:
             env.close()
 
-    def score(self, scores: Sequence[EpisodeScore]) -> float:
-        """What picks the best model: the worst episode's last-half mean speed as a fraction of
-        the all-human baseline's on the same seed (rings of different lengths then count
-        alike, and a policy must be good on every one of them: the mean let a policy that
-        stops the AV on short rings win on its long ones). The mean return when the env
-        reports no speeds."""
-        return relative_worst(scores, self.baseline)
-
     def run(
         self, act: Act, normalize: Callable[[np.ndarray], np.ndarray] | None
     ) -> list[EpisodeScore] | None:
@@ -210,15 +222,6 @@ class EpisodeRunner:
     def close(self) -> None:
         """Stop the env's simulation (idempotent)."""
         self.env.close()
-
-
-def relative_worst(scores: Sequence[EpisodeScore], baseline: Sequence[float]) -> float:
-    """The worst episode's last-half mean speed over the baseline's on the same seed (the
-    mean return when the speeds or the baseline are not known)."""
-    ratios = [s.last_half_speed / b for s, b in zip(scores, baseline, strict=True)]
-    if all(math.isfinite(r) for r in ratios) and all(b > 0 for b in baseline):
-        return float(min(ratios))
-    return float(np.mean([s.episode_return for s in scores]))
 
 
 def play_episode(

@@ -306,10 +306,9 @@ def _eval_runner(
     the same ``eval_episodes`` reset seeds at every evaluation, so scores are comparable.
     """
     seeds = [seed + 10_000 + i for i in range(tc.eval_episodes)]
-    if tc.eval_backend == "numpy":
-        return NumpyEpisodeRunner(cfg, seeds, stop)
     eval_cfg = replace(cfg, env=replace(cfg.env, evaluate=True))
-    return EpisodeRunner(eval_cfg, seeds, stop)
+    runner = NumpyEpisodeRunner if tc.eval_backend == "numpy" else EpisodeRunner
+    return runner(eval_cfg, seeds, stop)
 
 
 def _gamma(tc: TrainConfig) -> float:
