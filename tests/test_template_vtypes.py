@@ -233,3 +233,23 @@ def test_a_car_sumo_inserts_in_the_resets_first_step_joins_the_kernel(
         assert sorted(vk.get_ids()) == ["d0", "f0", "fl.0"]
     finally:
         env.close()
+
+
+@pytest.mark.sumo
+def test_a_templates_route_files_are_filtered_once_not_at_every_reset(
+    net_file: Path, tmp_path: Path
+) -> None:
+    net = Network("t", VehicleParams(), NetParams(template=template(net_file, tmp_path)))
+    env = Drive(EnvParams(horizon=10**6), SumoParams(sim_step=0.5, seed=0), net)
+    try:
+        env.reset(seed=0)
+        (files,) = env.k._route_files.values()
+        copies = [f for f in files if f.parent != tmp_path]  # the filtered copies
+        assert copies and all(f.is_file() for f in copies)
+        stamps = [f.stat().st_mtime_ns for f in copies]
+        env.reset(seed=1)
+        assert [f.stat().st_mtime_ns for f in copies] == stamps  # not written again
+        assert env.k.vehicle.api.vehicle.getIDList() == ()  # the reset itself still worked
+        assert first_seen(env, 3)["f0"] == 1
+    finally:
+        env.close()

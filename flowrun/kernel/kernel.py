@@ -46,6 +46,9 @@ class Kernel:
         self.simulation = SimulationKernel(sim_params.sim_step)
         self.traffic_light = TrafficLightKernel()
         self.net_file: Path | None = None
+        #: a template's route files as given to SUMO, by what decides them (read and
+        #: filtered once, not at every reset: an I-210 route file is megabytes)
+        self._route_files: dict[tuple[object, ...], tuple[Path, ...]] = {}
         #: routers of whole vehicle groups (``GroupRouters``), run at every vehicle update
         self.group_routers: Any = None
 
@@ -113,13 +116,23 @@ class Kernel:
         self.work_dir.mkdir(parents=True, exist_ok=True)  # a template is not built there
         routes = self.work_dir / f"{self.net_file.stem.removesuffix('.net')}.rou.xml"
         routes.write_text(routes_xml(spec, network.vehicles, network.net_params.inflows))
-        extra = sumo_route_files(  # a template's route files, less what flowrun defines
-            spec.extra_files, set(network.vehicles.type_names),
-            {d.id for d in spec.departures}, self.work_dir,
-        )  # fmt: skip
+        extra = self._template_route_files(network)
         tls_file = write_tls_file(network.traffic_lights, self.net_file, self.work_dir)
         tls = () if tls_file is None else (tls_file,)
         return SumoFiles(self.net_file, routes, extra, tls)
+
+    def _template_route_files(self, network: Network) -> tuple[Path, ...]:
+        """A template's route files less what flowrun defines (its vehicle types and the
+        vehicles it adds at reset), written once per combination."""
+        spec = network.spec
+        types = frozenset(network.vehicles.type_names)
+        added = frozenset(d.id for d in spec.departures)
+        key = (tuple(spec.extra_files), types, added)
+        files = self._route_files.get(key)
+        if files is None or not all(f.is_file() for f in files):
+            files = sumo_route_files(spec.extra_files, set(types), set(added), self.work_dir)
+            self._route_files[key] = files
+        return files
 
     def _insert(self, api: Any, table: VehicleTable) -> None:
         v = api.vehicle
