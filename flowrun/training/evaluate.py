@@ -215,7 +215,6 @@ def run_evaluation(
     episodes: int,
     progress: EvalProgress | None,
     out: Path | None,
-    wrap: Callable[[Any], Any] | None = None,
     should_stop: StopAsked | None = None,
 ) -> EvalResult:
     """The evaluation folder of any backend: the policy's and the all-human rollouts of
@@ -227,7 +226,6 @@ def run_evaluation(
         model: the model (file or checkpoint) rolled out.
         run_status: the training run's state (:func:`flowrun.training.runstate.run_state`).
         act: the policy, ``obs -> action``.
-        wrap: applied to each env before it is stepped (e.g. a multi-agent env's joint view).
         should_stop: whether Ctrl-C/SIGTERM was received (a
             :class:`~flowrun.training.runstate.StopRequest`): an error raised after that
             (the signal also killed netconvert or SUMO) labels the folder ``interrupted``
@@ -242,9 +240,9 @@ def run_evaluation(
     mark_running(out_dir)
     logs: list[Path] = []
     try:
-        rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress, wrap)
+        rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
         human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs,
-                         progress, wrap)  # fmt: skip
+                         progress)  # fmt: skip
     except KeyboardInterrupt as err:
         write_json(out_dir / "metrics.json",
                    {"status": "interrupted", **head, "logs": [p.name for p in logs]})
@@ -295,15 +293,13 @@ def _rollout(
     out_dir: Path,
     logs: list[Path],
     progress: EvalProgress | None,
-    wrap: Callable[[Any], Any] | None = None,
 ) -> list[RunMetrics]:
-    raw = make_env(cfg)
-    env = raw if wrap is None else wrap(raw)
+    env = make_env(cfg)  # a multi-agent env is stepped as one joint agent by Experiment
 
     def sink(run: int) -> FrameSink:
         path = out_dir / f"{label}_{run}.mcap"
         logs.append(path)
-        return open_run_log(path, raw, cfg, seed + run, run, extra={"evaluation": label})
+        return open_run_log(path, env, cfg, seed + run, run, extra={"evaluation": label})
 
     def on_step(run: int, step: int) -> None:
         if progress is not None:
@@ -313,5 +309,5 @@ def _rollout(
         experiment = Experiment(env, sink_factory=sink, progress=on_step)
         experiment.run(episodes, int(cfg.env.horizon), rl_actions=act, seed=seed)
     finally:
-        raw.close()
+        env.close()
     return list(experiment.metrics)

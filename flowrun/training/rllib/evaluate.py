@@ -20,7 +20,6 @@ import numpy as np
 
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, TrainingError
-from flowrun.multiagent.joint import joint_view
 from flowrun.training.evaluate import (
     EvalProgress,
     EvalResult,
@@ -147,7 +146,7 @@ def evaluate_rllib(
 
     head = {"deterministic": deterministic, "backend": "rllib"}
     return run_evaluation(cfg, run_dir, path, run_state(run_dir), head, act, episodes,
-                          progress, out, wrap=joint_view, should_stop=should_stop)  # fmt: skip
+                          progress, out, should_stop=should_stop)  # fmt: skip
 
 
 def _actor(
