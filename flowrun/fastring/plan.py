@@ -122,10 +122,18 @@ class RingPlan:
         return float(self.network.spec.length)
 
 
-def _refuse(what: str, path: str, source: str | None) -> ConfigError:
-    return ConfigError(
-        f"sim.backend numpy {what}; use sim.backend: sumo for this config", path, source or ""
-    )
+class NumpyBackendRefusal(ConfigError):
+    """A config the numpy backend cannot run: ``what`` it cannot do, at the key ``path``."""
+
+    def __init__(self, what: str, path: str, source: str) -> None:
+        self.what = what
+        super().__init__(
+            f"sim.backend numpy {what}; use sim.backend: sumo for this config", path, source
+        )
+
+
+def _refuse(what: str, path: str, source: str | None) -> NumpyBackendRefusal:
+    return NumpyBackendRefusal(what, path, source or "")
 
 
 def _controller_ok(c: AccelerationController) -> bool:

@@ -20,7 +20,7 @@ import numpy as np
 
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError
-from flowrun.fastring.plan import RingPlan, ring_plan
+from flowrun.fastring.plan import NumpyBackendRefusal, RingPlan, ring_plan
 from flowrun.fastring.rings import FastRings
 from flowrun.fastring.tasks import RingTask
 from flowrun.training.periodic_eval import Act, Episodes, EpisodeScore
@@ -37,11 +37,10 @@ def numpy_eval_plan(cfg: ExperimentConfig) -> RingPlan:
     eval_cfg = replace(cfg, env=replace(cfg.env, evaluate=True))
     try:
         return ring_plan(replace(eval_cfg, sim=replace(cfg.sim, backend="numpy")))
-    except ConfigError as err:
-        what = err.message.removeprefix("sim.backend numpy ").split("; use ")[0]
+    except NumpyBackendRefusal as err:
         where = f" ({err.path})" if err.path else ""
         raise ConfigError(
-            f"the numpy evaluation backend {what}{where}; use train.eval_backend: sumo "
+            f"the numpy evaluation backend {err.what}{where}; use train.eval_backend: sumo "
             "for this config",
             EVAL_BACKEND_PATH,
             cfg.source or "",
