@@ -131,6 +131,28 @@ def _check_route(start: str, route: tuple[str, ...], edges: set[str],
             )
 
 
+def file_names(value: Any) -> list[str]:
+    """A template entry as a list of file names (Flow takes one name or a list)."""
+    if value is None:
+        return []
+    return [str(value)] if isinstance(value, str | os.PathLike) else [str(v) for v in value]
+
+
+def read_xml(path: str, key: str) -> ET.Element:
+    """The root element of a template's ``key`` file (``rou``, ``vtype``).
+
+    Raises:
+        ConfigError: the file is not readable XML, at ``template.<key>``.
+    """
+    try:
+        return ET.parse(path).getroot()
+    except (OSError, ET.ParseError) as err:
+        raise ConfigError(
+            f"cannot read {key} file {path!r} as XML ({err}); give a SUMO {key} file",
+            path=f"template.{key}",
+        ) from None
+
+
 def template_files(template: Any) -> tuple[Path, tuple[str, ...]]:
     """The net file and the route files of Flow's ``template`` (a path or a dict).
 
@@ -143,8 +165,7 @@ def template_files(template: Any) -> tuple[Path, tuple[str, ...]]:
                               "'vtype')", path="template")  # fmt: skip
         extra: list[str] = []
         for key in ("rou", "vtype"):
-            value = template.get(key) or []
-            for name in [value] if isinstance(value, str | os.PathLike) else value:
+            for name in file_names(template.get(key)):
                 if not Path(name).is_file():
                     raise ConfigError(f"{key} file {str(name)!r} not found", path="template")
                 if key == "rou":
@@ -161,13 +182,8 @@ def rou_routes(files: Any) -> dict[str, list[str]]:
         ConfigError: a file is not readable XML.
     """
     out: dict[str, list[str]] = {}
-    for name in [files] if isinstance(files, str | os.PathLike) else files:
-        try:
-            root = ET.parse(name).getroot()
-        except (OSError, ET.ParseError) as err:
-            raise ConfigError(
-                f"cannot read rou file {str(name)!r}: {err}", path="template"
-            ) from None
+    for name in file_names(files):
+        root = read_xml(name, "rou")
         for vehicle in root.iter("vehicle"):
             route = vehicle.find("route")
             if route is not None and "edges" in route.attrib:

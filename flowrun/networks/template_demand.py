@@ -30,7 +30,6 @@ to SUMO's (``DEFAULT_VEHTYPE``, driven by SUMO; ``base``; ``0``).
 from __future__ import annotations
 
 import dataclasses
-import os
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -40,6 +39,7 @@ from flowrun.config.params import VehicleParams
 from flowrun.config.vtype import SumoCarFollowingParams, SumoLaneChangeParams
 from flowrun.errors import ConfigError
 from flowrun.networks.base import NetworkSpec, TemplateVehicle
+from flowrun.networks.template import file_names, read_xml
 from flowrun.suggest import did_you_mean
 
 #: vType attribute -> ``SumoCarFollowingParams`` field: what Flow reads from every vType
@@ -57,23 +57,6 @@ SPEED_MODE, LANE_CHANGE_MODE = 31, 1621
 SUMO_DEFAULT_TYPE = "DEFAULT_VEHTYPE"
 
 
-def file_names(value: Any) -> list[str]:
-    """A template entry as a list of file names (Flow takes one name or a list)."""
-    if value is None:
-        return []
-    return [str(value)] if isinstance(value, str | os.PathLike) else [str(v) for v in value]
-
-
-def _root(path: str, key: str) -> ET.Element:
-    try:
-        return ET.parse(path).getroot()
-    except (OSError, ET.ParseError) as err:
-        raise ConfigError(
-            f"cannot read {key} file {path!r} as XML ({err}); give a SUMO {key} file",
-            path=f"template.{key}",
-        ) from None
-
-
 def read_vtypes(path: str) -> dict[str, tuple[SumoCarFollowingParams, SumoLaneChangeParams]]:
     """The vehicle types of a ``vtype`` file with Flow's parameters (module docstring).
 
@@ -81,7 +64,7 @@ def read_vtypes(path: str) -> dict[str, tuple[SumoCarFollowingParams, SumoLaneCh
         ConfigError: the file is not XML, a vType has no id, lacks one of the six attributes
             Flow reads, or one of them is not a number.
     """
-    root = _root(path, "vtype")
+    root = read_xml(path, "vtype")
     parents = root.findall("vTypeDistribution") or [root]  # Flow's rule for LuST's files
     out: dict[str, tuple[SumoCarFollowingParams, SumoLaneChangeParams]] = {}
     for parent in parents:
@@ -117,7 +100,7 @@ def read_vehicles(files: Iterable[str]) -> tuple[tuple[TemplateVehicle, ...], se
         ConfigError: a file is not XML; a vehicle has no id, a ``depart`` that is not a
             number of seconds, no route, or an id used twice.
     """
-    roots = [(name, _root(name, "rou")) for name in files]
+    roots = [(name, read_xml(name, "rou")) for name in files]
     routes = {r.get("id", ""): r.get("edges", "") for _, root in roots for r in root.iter("route")}
     own_types = {t.get("id", "") for _, root in roots for t in root.iter("vType")}
     out: dict[str, TemplateVehicle] = {}
