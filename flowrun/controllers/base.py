@@ -15,62 +15,14 @@ from __future__ import annotations
 import inspect
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any, ClassVar
 
 import numpy as np
-import numpy.typing as npt
 
 from flowrun.controllers._checks import number
 from flowrun.controllers.fail_safe import apply_fail_safes, check_fail_safe
-
-FloatArray = npt.NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class CarFollowingInputs:
-    """State of a group of vehicles at one step (all arrays have one entry per vehicle).
-
-    Attributes:
-        speed: ego speed, m/s.
-        headway: bumper-to-bumper gap to the leader, m (``inf`` when there is no leader).
-        leader_speed: leader's speed, m/s (equal to ``speed`` when there is no leader).
-        follower_headway: gap from the follower's front bumper to the ego's rear, m
-            (``inf`` when there is no follower).
-        follower_speed: follower's speed, m/s (equal to ``speed`` when there is none).
-        speed_limit: speed limit of the ego's lane, m/s.
-        dt: simulation step, s.
-        time: simulation time, s.
-        max_accel: the vehicle type's maximum acceleration (SUMO ``accel``), m/s^2, or
-            ``None`` when unknown. Used by controllers that Flow caps or that fall back to
-            "full throttle" without a leader, and by the ``feasible_accel`` fail-safe.
-        max_decel: the vehicle type's maximum deceleration (SUMO ``decel``, positive), m/s^2,
-            or ``None`` when unknown.
-        length: the vehicle's length, m, or ``None`` when unknown (Flow's LAC uses it).
-    """
-
-    speed: FloatArray
-    headway: FloatArray
-    leader_speed: FloatArray
-    follower_headway: FloatArray
-    follower_speed: FloatArray
-    speed_limit: FloatArray
-    dt: float
-    time: float = 0.0
-    max_accel: FloatArray | None = None
-    max_decel: FloatArray | None = None
-    length: FloatArray | None = None
-
-    @property
-    def size(self) -> int:
-        """Number of vehicles."""
-        return int(self.speed.shape[0])
-
-    @property
-    def has_leader(self) -> npt.NDArray[np.bool_]:
-        """Whether each vehicle has a leader (finite headway)."""
-        return np.isfinite(self.headway)
-
+from flowrun.types import CarFollowingInputs, FloatArray
 
 #: SUMO's default ``accel`` of a passenger car, m/s^2 (Flow's ``SumoCarFollowingParams``).
 DEFAULT_MAX_ACCEL = 2.6

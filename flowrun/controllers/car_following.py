@@ -25,8 +25,6 @@ from flowrun.controllers._checks import number
 from flowrun.controllers.base import (
     DEFAULT_MAX_ACCEL,
     AccelerationController,
-    CarFollowingInputs,
-    FloatArray,
 )
 from flowrun.controllers.car_following_formulas import (
     bando_ftl_accel,
@@ -38,6 +36,7 @@ from flowrun.controllers.car_following_formulas import (
     ovm_accel,
 )
 from flowrun.flow_values import FLOW_ERROR, FLOW_NO_GAP
+from flowrun.types import CarFollowingInputs, FloatArray
 
 
 def _free_road(inputs: CarFollowingInputs, accel: FloatArray) -> FloatArray:

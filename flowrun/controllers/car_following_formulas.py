@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from flowrun.controllers.base import FloatArray
+from flowrun.types import FloatArray
 
 #: Smallest gap (m) a formula divides by: Flow's guard against ``h == 0``.
 MIN_GAP = 1e-3

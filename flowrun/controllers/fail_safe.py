@@ -8,18 +8,12 @@ after the noise, in the order the user listed them, exactly as Flow's ``get_acti
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from flowrun.controllers._checks import ParameterValueError
 from flowrun.suggest import did_you_mean
-
-if TYPE_CHECKING:
-    from flowrun.controllers.base import CarFollowingInputs
-
-FloatArray = npt.NDArray[np.float64]
+from flowrun.types import CarFollowingInputs, FloatArray
 
 FAIL_SAFES = ("instantaneous", "safe_velocity", "feasible_accel", "obey_speed_limit")
 

@@ -10,11 +10,9 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import numpy as np
-import numpy.typing as npt
 
 from flowrun.controllers.base import takes_env_only
-
-IntArray = npt.NDArray[np.int_]
+from flowrun.types import IntArray
 
 
 class LaneChangeController:

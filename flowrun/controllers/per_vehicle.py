@@ -26,8 +26,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from flowrun.controllers.base import AccelerationController, CarFollowingInputs, FloatArray
+from flowrun.controllers.base import AccelerationController
 from flowrun.controllers.fail_safe import apply_fail_safes
+from flowrun.types import CarFollowingInputs, FloatArray
 
 if TYPE_CHECKING:
     from flowrun.config.params import VehicleParams

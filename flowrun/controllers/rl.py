@@ -10,7 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from flowrun.controllers.base import AccelerationController, CarFollowingInputs, FloatArray
+from flowrun.controllers.base import AccelerationController
+from flowrun.types import CarFollowingInputs, FloatArray
 
 
 class RLController(AccelerationController):

@@ -13,7 +13,8 @@ from typing import Any
 import numpy as np
 
 from flowrun.controllers._checks import number
-from flowrun.controllers.base import AccelerationController, CarFollowingInputs, FloatArray
+from flowrun.controllers.base import AccelerationController
+from flowrun.types import CarFollowingInputs, FloatArray
 
 
 def follower_stopper_speed(

@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from flowrun.envs import rewards as formulas
-from flowrun.envs.rewards import FLOAT32_EPS, FloatArray
+from flowrun.envs.rewards import FLOAT32_EPS
+from flowrun.types import FloatArray
 
 
 def _speeds(env: Any, veh_ids: Sequence[str]) -> FloatArray:

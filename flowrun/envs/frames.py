@@ -9,15 +9,12 @@ from dataclasses import dataclass
 from itertools import groupby
 
 import numpy as np
-import numpy.typing as npt
 
 from flowrun.kernel import Kernel
 from flowrun.kernel.geometry import RingPlacement
 from flowrun.kernel.population import Population
 from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
+from flowrun.types import FloatArray, IntArray
 
 
 def snapshot_frame(k: Kernel, step: int, deferred: bool = False) -> VehicleFrame:

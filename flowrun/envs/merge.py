@@ -10,15 +10,13 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import numpy as np
-import numpy.typing as npt
 from gymnasium.spaces import Box
 
 from flowrun.envs.base import Env
 from flowrun.envs.rewards import desired_velocity
 from flowrun.envs.ring.accel import acceleration_box
 from flowrun.errors import ConfigError
-
-FloatArray = npt.NDArray[np.float64]
+from flowrun.types import FloatArray
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     # maximum acceleration of the AVs, m/s^2

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-FloatArray = npt.NDArray[np.float64]
+from flowrun.types import FloatArray
+
 FLOAT32_EPS = float(np.finfo(np.float32).eps)
 
 

@@ -11,10 +11,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import numpy.typing as npt
 
-BoolArray = npt.NDArray[np.bool_]
-FloatArray = npt.NDArray[np.float64]
+from flowrun.types import BoolArray, FloatArray
+
 #: per light, whether it is asked to switch (an array, or plain bools)
 SwitchRequests = BoolArray | Sequence[bool]
 

@@ -14,12 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium.utils import seeding
 
-from flowrun.controllers.base import CarFollowingInputs
 from flowrun.fastring.physics import (
     NUMERICAL_EPS,
-    BoolArray,
-    FloatArray,
-    IntArray,
     commanded_speed,
     flat_index,
     noise_term,
@@ -30,6 +26,7 @@ from flowrun.fastring.physics import (
 from flowrun.fastring.plan import RingPlan
 from flowrun.networks.base import Network
 from flowrun.networks.ring import ring_edge_count
+from flowrun.types import BoolArray, CarFollowingInputs, FloatArray, IntArray
 
 #: simulation steps of controller noise drawn at once per ring
 NOISE_BLOCK = 128

@@ -21,11 +21,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import numpy.typing as npt
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
+from flowrun.types import FloatArray, IntArray
 
 #: SUMO's ``NUMERICAL_EPS`` (m, m/s): smallest gap/speed its formulas divide by, and the
 #: overlap (m) beyond which it reports a collision.

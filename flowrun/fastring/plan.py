@@ -25,8 +25,9 @@ from flowrun.envs.ring.wave_attenuation import (
 )
 from flowrun.envs.vehicles import build_controllers
 from flowrun.errors import ConfigError
-from flowrun.fastring.physics import DEFAULT_EMERGENCY_DECEL, FloatArray
+from flowrun.fastring.physics import DEFAULT_EMERGENCY_DECEL
 from flowrun.networks.base import Network
+from flowrun.types import FloatArray
 
 #: env classes the numpy backend reproduces, by the kind of observation/reward it computes
 SUPPORTED_ENVS: dict[type, str] = {

@@ -20,9 +20,9 @@ from flowrun.fastring.batch import (
     fresh_state,
     new_generator,
 )
-from flowrun.fastring.physics import BoolArray, FloatArray, IntArray
 from flowrun.fastring.plan import RingPlan
 from flowrun.networks.base import Network
+from flowrun.types import BoolArray, FloatArray, IntArray
 
 
 class FastRings:

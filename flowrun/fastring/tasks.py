@@ -15,9 +15,9 @@ from gymnasium.spaces import Box
 from flowrun.envs.rewards import desired_velocities, wave_attenuation_rewards
 from flowrun.envs.ring.accel import acceleration_box
 from flowrun.envs.ring.wave_attenuation import partial_observation
-from flowrun.fastring.physics import BoolArray, FloatArray
 from flowrun.fastring.plan import RingPlan
 from flowrun.fastring.rings import FastRings
+from flowrun.types import BoolArray, FloatArray
 
 
 class RingTask:

@@ -17,10 +17,10 @@ import gymnasium
 import numpy as np
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
 
-from flowrun.fastring.physics import BoolArray
 from flowrun.fastring.plan import RingPlan
 from flowrun.fastring.rings import FastRings
 from flowrun.fastring.tasks import RingTask
+from flowrun.types import BoolArray
 
 
 class RingEpisodes:

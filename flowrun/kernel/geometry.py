@@ -13,10 +13,8 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
+from flowrun.types import FloatArray, IntArray
 
 #: SUMO's POSITION_EPS, m: the smallest shape length used for the geometry factor.
 POSITION_EPS = 0.1

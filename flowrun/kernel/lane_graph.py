@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from flowrun.kernel.lanes import IntArray, LaneTable
+from flowrun.kernel.lanes import LaneTable
+from flowrun.types import IntArray
 
 
 class LaneGraph:

@@ -9,12 +9,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
 from flowrun.networks.base import NetworkSpec
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
+from flowrun.types import IntArray
 
 
 def lane_edge(lane_id: str) -> tuple[str, int]:

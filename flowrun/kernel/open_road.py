@@ -24,8 +24,9 @@ from typing import Any
 import numpy as np
 
 from flowrun.kernel.lane_graph import LaneGraph
-from flowrun.kernel.population import FloatArray, IntArray, Population
+from flowrun.kernel.population import Population
 from flowrun.kernel.snapshot import leaders_by_lane
+from flowrun.types import FloatArray, IntArray
 
 #: How far past the end (or before the start) of its lane a car looks for a leader
 #: (follower), m. Beyond it IDM's interaction term is below (32 / 500)^2 = 0.4 %.

@@ -13,7 +13,6 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from flowrun.controllers.base import CarFollowingInputs
 from flowrun.errors import SimulationError
 from flowrun.kernel.geometry import LaneGeometry, RingEdges, RingPlacement
 from flowrun.kernel.lanes import LaneTable
@@ -33,6 +32,7 @@ from flowrun.kernel.vehicle_open import (
     OpenRoadReads,
 )
 from flowrun.networks.base import NetworkSpec
+from flowrun.types import CarFollowingInputs
 
 _flatten = chain.from_iterable
 

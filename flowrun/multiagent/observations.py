@@ -5,9 +5,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
-FloatArray = npt.NDArray[np.float64]
+from flowrun.types import FloatArray
 
 #: Bounds of the neighbour 5-vector: speed, relative leader speed, headway, relative follower
 #: speed, tailway (normalised; the same bounds as flowrun's single-agent ``MergePOEnv``).

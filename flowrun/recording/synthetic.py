@@ -12,7 +12,8 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from flowrun.recording.frames import FloatArray, StepStats, VehicleFrame
+from flowrun.recording.frames import StepStats, VehicleFrame
+from flowrun.types import FloatArray
 
 VEHICLE_LENGTH = 5.0
 

@@ -9,8 +9,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flowrun.recording import McapLog
-from flowrun.recording.frames import FloatArray
 from flowrun.replay.route import RouteLayout
+from flowrun.types import FloatArray
 
 StrArray = np.ndarray
 

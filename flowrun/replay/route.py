@@ -17,14 +17,11 @@ from dataclasses import dataclass, field
 from itertools import pairwise, repeat
 
 import numpy as np
-import numpy.typing as npt
 
 from flowrun.errors import RecordingError
 from flowrun.recording import McapLog
-from flowrun.recording.frames import FloatArray
 from flowrun.suggest import did_you_mean
-
-IntArray = npt.NDArray[np.int64]
+from flowrun.types import FloatArray, IntArray
 
 NET_ATTACHMENT = "network.net.xml"
 #: metadata keys written by the run (see ``flowrun.envs.frames.network_metadata``)

@@ -30,10 +30,9 @@ import numpy.typing as npt
 
 from flowrun.errors import RecordingError
 from flowrun.recording import McapLog
-from flowrun.recording.frames import FloatArray
 from flowrun.replay.route import NET_ATTACHMENT, parse_net_xml
+from flowrun.types import FloatArray, IntArray
 
-IntArray = npt.NDArray[np.int64]
 #: Speed below which a car counts as queued, m/s (as ``flowrun.experiment.signal_baselines``).
 QUEUE_SPEED = 0.1
 UNKNOWN, RED, YELLOW, GREEN = -1, 0, 1, 2

@@ -7,13 +7,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import numpy.typing as npt
 
 from flowrun.recording import McapLog
-from flowrun.recording.frames import FloatArray, StepStats
+from flowrun.recording.frames import StepStats
 from flowrun.replay.route import RouteLayout, network_length
-
-IntArray = npt.NDArray[np.int64]
+from flowrun.types import FloatArray, IntArray
 
 
 @dataclass(frozen=True)

@@ -14,9 +14,9 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from flowrun.recording import open_log
-from flowrun.recording.frames import FloatArray
 from flowrun.replay.analysis import TimeSpace, time_space_points
 from flowrun.replay.plots import plot_stride, plot_time_space
+from flowrun.types import FloatArray
 
 
 def get_time_space_data(
