@@ -11,11 +11,11 @@ objects — the very objects of the group, so changing them changes the group), 
 from __future__ import annotations
 
 import builtins
-import importlib
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from flowrun.config.vtype import SumoCarFollowingParams, SumoLaneChangeParams, vtype_attributes
+from flowrun.controllers.registry import resolve_controller
 
 
 @dataclass(frozen=True)
@@ -85,9 +85,8 @@ def controller_tuple(spec: ControllerSpec | None) -> tuple[Any, dict[str, Any]] 
         return None
     cls: Any = spec.cls
     if cls is None:
-        try:  # config sits below the controllers: look the name up only when asked
-            registry = importlib.import_module("flowrun.controllers.registry")
-            cls = registry.resolve_controller(spec.type)
+        try:
+            cls = resolve_controller(spec.type)
         except Exception:  # an unknown name: validation reports it where it matters
             cls = spec.type
     return cls, dict(spec.params)

@@ -22,32 +22,9 @@ import numpy as np
 
 from flowrun.controllers._checks import number
 from flowrun.controllers.fail_safe import apply_fail_safes, check_fail_safe
+from flowrun.controllers.limits import DEFAULT_MAX_ACCEL, DEFAULT_MAX_DECEL, vehicle_limits
+from flowrun.controllers.view import flow_action, read_inputs
 from flowrun.types import CarFollowingInputs, FloatArray
-
-#: SUMO's default ``accel`` of a passenger car, m/s^2 (Flow's ``SumoCarFollowingParams``).
-DEFAULT_MAX_ACCEL = 2.6
-
-#: Flow's default ``decel`` of ``SumoCarFollowingParams``, m/s^2.
-DEFAULT_MAX_DECEL = 7.5
-
-
-def vehicle_limits(car_following_params: Any) -> tuple[float, float] | None:
-    """``(accel, decel)`` (m/s^2, decel positive) of a vehicle type's car-following params.
-
-    Reads Flow's ``controller_params['accel'/'decel']`` when present, else the ``accel`` and
-    ``decel`` attributes (flowrun's :class:`~flowrun.config.params.SumoCarFollowingParams`).
-    ``None`` when ``car_following_params`` is ``None`` or has neither.
-    """
-    if car_following_params is None:
-        return None
-    table = getattr(car_following_params, "controller_params", None)
-    if isinstance(table, dict) and "accel" in table and "decel" in table:
-        return float(table["accel"]), abs(float(table["decel"]))
-    accel = getattr(car_following_params, "accel", None)
-    decel = getattr(car_following_params, "decel", None)
-    if accel is None or decel is None:
-        return None
-    return float(accel), abs(float(decel))
 
 
 def make_inputs(
@@ -226,8 +203,6 @@ class AccelerationController:
 
     # ------------------------------------------------------------- Flow's fail-safe helpers
     def _one(self, env: Any) -> CarFollowingInputs:
-        from flowrun.controllers.view import read_inputs
-
         if self.veh_id is None:
             raise ValueError(f"{type(self).__name__}: Flow's per-vehicle helpers need veh_id")
         return read_inputs(env, self.veh_id, self.max_accel, self.max_deaccel)
@@ -264,9 +239,7 @@ class AccelerationController:
     def get_action(self, env: Any) -> float | None:
         """Flow's ``get_action(env)``: this vehicle's acceleration with noise and fail-safes
         (m/s^2), or ``None`` when SUMO drives it this step (see
-        :func:`flowrun.controllers.per_vehicle.flow_action`)."""
-        from flowrun.controllers.per_vehicle import flow_action
-
+        :func:`flowrun.controllers.view.flow_action`)."""
         return flow_action(self, env)
 
 

@@ -17,7 +17,8 @@ Two additions, each a parameter (both 0 give Flow's one-hop routes):
   has edges of 2 and 5 m), so a car cannot cross its route's whole last edge within one
   step and leave the network at its end before the router sees it there.
 
-Routers of this kind (a ``route_vehicles`` method) are driven by :class:`GroupRouters`:
+Routers of this kind (a ``route_vehicles`` method) are driven by
+:class:`~flowrun.controllers.drivers.GroupRouters`:
 the kernel runs them at every update, right after reading where the cars are and before
 looking for leaders along the routes (as it does for ``ContinuousRouter``), so a car never
 sits on its route's last edge in an observed state.
@@ -273,40 +274,3 @@ class MinicityRouter(Router):
             live = set(ids)
             self._plan = {v: p for v, p in plan.items() if v in live}
         return out_rows, out_routes
-
-
-class GroupRouters:
-    """Drives the routers that route a whole vehicle group at once (``route_vehicles``).
-
-    Args:
-        routers: ``(group index, router)`` pairs.
-    """
-
-    def __init__(self, routers: Sequence[tuple[int, Any]]) -> None:
-        self.routers = list(routers)
-
-    @classmethod
-    def of(cls, vehicles: Any) -> GroupRouters:
-        """The group routers of an experiment's vehicle groups (built from their specs)."""
-        from flowrun.controllers.registry import build_controller, resolve_controller
-
-        found = []
-        for gi, g in enumerate(vehicles.groups):
-            spec = g.routing_controller
-            if spec is None:
-                continue
-            router_cls = spec.cls or resolve_controller(spec.type, "routing")
-            if callable(getattr(router_cls, "route_vehicles", None)):
-                found.append((gi, build_controller(router_cls, dict(spec.params), "routing")))
-        return cls(found)
-
-    def __bool__(self) -> bool:
-        return bool(self.routers)
-
-    def step(self, vk: Any, lanes: Any) -> None:
-        """Reroute the cars that need it, at once (the kernel calls this at each update,
-        before it looks for leaders along the routes)."""
-        for gi, router in self.routers:
-            rows, routes = router.route_vehicles(vk, lanes, vk.table.rows_of_group(gi), vk.rng)
-            if rows:
-                vk.reroute_now(rows, routes)

@@ -9,6 +9,9 @@ the kernel's own step stays vectorised).
 A stateful controller (:class:`~flowrun.controllers.velocity.PISaturation`) gets its own copy
 in the view, so the view's calls never disturb the group's memory; keep one view per vehicle
 to keep its memory from step to step, as Flow keeps one controller per vehicle.
+:func:`flow_action` is Flow's ``get_action(env)`` of any controller object, the per-vehicle
+(Flow-style) ones included. This module sits below the controller contract
+(:mod:`flowrun.controllers.base`), whose Flow helper methods call it.
 """
 
 from __future__ import annotations
@@ -19,13 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from flowrun.controllers.base import (
-    DEFAULT_MAX_ACCEL,
-    DEFAULT_MAX_DECEL,
-    AccelerationController,
-    CarFollowingInputs,
-    vehicle_limits,
-)
+from flowrun.controllers.fail_safe import apply_fail_safes
+from flowrun.controllers.limits import DEFAULT_MAX_ACCEL, DEFAULT_MAX_DECEL, vehicle_limits
+from flowrun.types import CarFollowingInputs
 
 #: Distance to the end of its edge (m) within which FollowerStopper gives no command on a
 #: ``danger_edges`` edge (Flow).
@@ -130,7 +129,7 @@ class VehicleControllerView:
 
     def __init__(
         self,
-        controller: AccelerationController,
+        controller: Any,
         veh_id: str,
         car_following_params: Any = None,
         rng: np.random.Generator | None = None,
@@ -222,3 +221,56 @@ class VehicleControllerView:
             x = float(env.k.vehicle.get_x_by_id(self.veh_id))
             return bool(x < control[0] or x > control[1])
         return False
+
+
+def controller_rng(env: Any) -> np.random.Generator:
+    """The generator for Flow's acceleration noise: the env's controller generator (seeded
+    by ``reset``), else ``env.np_random``, else a fresh one."""
+    for name in ("controller_rng", "np_random"):
+        rng = getattr(env, name, None)
+        if isinstance(rng, np.random.Generator):
+            return rng
+    return np.random.default_rng()
+
+
+def flow_action(controller: Any, env: Any) -> float | None:
+    """Flow's ``BaseController.get_action(env)`` for one vehicle (``controller.veh_id``).
+
+    ``None`` (SUMO drives the car this step) on no edge or a junction-internal edge, or when
+    ``get_accel`` gives ``None``. Otherwise noise ``sqrt(dt) * N(0, noise)`` is added, then
+    the fail-safes run in the listed order, as in Flow. A vectorised (built-in) controller
+    answers through a :class:`~flowrun.controllers.view.VehicleControllerView` of itself.
+
+    Raises:
+        ValueError: the controller has no ``veh_id``.
+    """
+    veh_id = controller.veh_id
+    if veh_id is None:
+        raise ValueError(
+            f"{type(controller).__name__}.get_action(env) needs the controller's veh_id; "
+            "create it as Flow does: Controller(veh_id, car_following_params=...)"
+        )
+    if not controller.per_vehicle:
+        view = controller.__dict__.get("_flow_view")
+        if view is None or view.veh_id != veh_id:
+            view = VehicleControllerView(controller, veh_id)
+            controller.__dict__["_flow_view"] = view
+        return view.get_action(env)
+    edge = env.k.vehicle.get_edge(veh_id)
+    if not edge or edge[0] == ":":
+        return None
+    accel = controller.get_accel(env)
+    if accel is None:
+        return None
+    value = float(accel)
+    if controller.noise > 0:
+        dt = float(getattr(env, "sim_step", None) or env.sim_params.sim_step)
+        value += math.sqrt(dt) * float(controller_rng(env).normal(0.0, controller.noise))
+    if controller.fail_safe:
+        inputs = read_inputs(env, veh_id, controller.max_accel, controller.max_deaccel)
+        value = float(
+            apply_fail_safes(
+                controller.fail_safe, np.array([value]), inputs, controller.time_delay
+            )[0]
+        )
+    return value

@@ -25,12 +25,8 @@ import numpy as np
 
 from flowrun.config.params import EnvParams, SumoParams
 from flowrun.config.validate import check_params
-from flowrun.controllers.minicity_router import GroupRouters
-from flowrun.controllers.per_vehicle import (
-    FlowStyleDriver,
-    PerVehicleGroup,
-    bind_per_vehicle_groups,
-)
+from flowrun.controllers.drivers import FlowStyleDriver, GroupRouters, bind_per_vehicle_groups
+from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.envs.frames import StepRecord, complete_frames, step_record
 from flowrun.envs.render import render_ring
 from flowrun.envs.vehicles import (

@@ -9,7 +9,8 @@ import numpy as np
 
 from flowrun.config.params import VehicleParams
 from flowrun.controllers.base import AccelerationController
-from flowrun.controllers.per_vehicle import FlowStyleDriver, PerVehicleGroup
+from flowrun.controllers.drivers import FlowStyleDriver
+from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.controllers.registry import build_controller, resolve_controller
 from flowrun.controllers.view import VehicleControllerView
 from flowrun.kernel.population import Population, VehicleClass, VehicleTable
