@@ -10,7 +10,7 @@ from __future__ import annotations
 import pickle
 import zipfile
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -22,7 +22,6 @@ from flowrun.config.experiment_checks import sub_path
 from flowrun.config.loader import config_from_dict, load_config, read_config_text
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.overrides import apply_overrides
-from flowrun.config.params import VehicleParams, is_rl
 from flowrun.config.yamlio import parse_yaml
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError, TrainingError
@@ -38,6 +37,7 @@ from flowrun.experiment.rundir import (
 )
 from flowrun.experiment.runner import Experiment, FrameSink
 from flowrun.training.algorithms import algorithm_class
+from flowrun.training.periodic_eval import all_human
 from flowrun.training.trainer import (
     BEST_MODEL,
     BEST_VECNORMALIZE,
@@ -93,18 +93,6 @@ def mean_metrics(rows: Sequence[RunMetrics]) -> dict[str, float]:
             "min_speed", "episode_return", "collisions")
     return {k: float(np.mean([getattr(m, k) for m in rows])) if rows else float("nan")
             for k in keys}
-
-
-def all_human(cfg: ExperimentConfig) -> ExperimentConfig:
-    """The config with each RL group driven like the first human group."""
-    humans = [g for g in cfg.vehicles.groups if not is_rl(g)]
-    if not humans:
-        raise ConfigError("no human vehicle group to copy for the all-human baseline", "vehicles")
-    human = humans[0].acceleration_controller
-    groups = [
-        replace(g, acceleration_controller=human) if is_rl(g) else g for g in cfg.vehicles.groups
-    ]
-    return replace(cfg, vehicles=VehicleParams(groups))
 
 
 def eval_config(

@@ -23,7 +23,7 @@ from flowrun.errors import ConfigError
 from flowrun.fastring.plan import NumpyBackendRefusal, RingPlan, ring_plan
 from flowrun.fastring.rings import FastRings
 from flowrun.fastring.tasks import RingTask
-from flowrun.training.periodic_eval import Act, Episodes, EpisodeScore
+from flowrun.training.periodic_eval import Act, Episodes, EpisodeScore, all_human
 
 EVAL_BACKEND_PATH = "train.eval_backend"
 
@@ -60,7 +60,6 @@ class NumpyEpisodeRunner(Episodes):
         :class:`~flowrun.training.periodic_eval.Episodes` for the other arguments."""
         from flowrun.envs.factory import env_class
         from flowrun.envs.ring.wave_attenuation import spread_lengths
-        from flowrun.training.evaluate import all_human
 
         super().__init__(seeds, should_stop)
         self._start: FastRings | None = None

@@ -21,13 +21,14 @@ import math
 import time
 import zipfile
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from flowrun.config.model import ExperimentConfig
+from flowrun.config.params import VehicleParams, is_rl
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.training.deps import require
 
@@ -43,6 +44,18 @@ EVAL_LOG = "eval_log"
 EVALUATIONS = "evaluations.npz"
 # obs (1-D, already normalised) -> action; a batch of observations (rows) -> actions (rows)
 Act = Callable[[np.ndarray], np.ndarray]
+
+
+def all_human(cfg: ExperimentConfig) -> ExperimentConfig:
+    """The config with each RL group driven like the first human group."""
+    humans = [g for g in cfg.vehicles.groups if not is_rl(g)]
+    if not humans:
+        raise ConfigError("no human vehicle group to copy for the all-human baseline", "vehicles")
+    human = humans[0].acceleration_controller
+    groups = [
+        replace(g, acceleration_controller=human) if is_rl(g) else g for g in cfg.vehicles.groups
+    ]
+    return replace(cfg, vehicles=VehicleParams(groups))
 
 
 def numpy_policy(policy: Any) -> Act | None:
@@ -187,7 +200,6 @@ class EpisodeRunner(Episodes):
     def _baseline(self, cfg: ExperimentConfig) -> list[float]:
         """Last-half mean speed of each seed's episode with the AVs driven like the humans."""
         from flowrun.envs.factory import make_env
-        from flowrun.training.evaluate import all_human
 
         try:
             human = all_human(cfg)
