@@ -90,6 +90,7 @@ def _env_name(value: Any, where: str) -> tuple[str, type | None]:
 
 def _network_type(value: Any, where: str) -> tuple[str, type | None]:
     """``network.type`` of a network class or name, and the class object if one was given."""
+    from flowrun.networks.base import Network
     from flowrun.networks.registry import NETWORKS, network_class
 
     canonical = {cls: name for name, cls in NETWORKS.items()}
@@ -98,11 +99,13 @@ def _network_type(value: Any, where: str) -> tuple[str, type | None]:
             return canonical[value], value
         if value.__module__.startswith(("flowrun.networks", "flowrun.scenarios")):
             value = value.__name__  # e.g. the base ``Network`` (with a template)
+        elif issubclass(value, Network):  # a user's network: by its import path
+            return class_path(value), value
         else:
-            names = [c.__name__ for c in NETWORKS.values()]
             raise ConfigError(
-                f"{value.__qualname__} is not one of flowrun's networks ({', '.join(names)}); "
-                "a road of your own can be given as a .net.xml with NetParams(template=...)",
+                f"{value.__qualname__} is not a network class: a network subclasses "
+                "flowrun.networks.Network (Flow's Network) or is one of flowrun's "
+                f"({', '.join(c.__name__ for c in NETWORKS.values())})",
                 "network",
                 where,
             )

@@ -264,7 +264,7 @@ def _build_network(cfg: ExperimentConfig, loc: Locations) -> Any:
     if find is None:
         return None
     try:
-        cls = find(cfg.network.type)
+        cls = find(cfg.network.type, _search_dir(loc))
         tls = cfg.traffic_lights.programs  # a network may make the nodes with lights ones
         network = cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial, tls)
     except ConfigError as err:
@@ -307,13 +307,19 @@ def _check_traffic_lights(cfg: ExperimentConfig, network: Any, loc: Locations) -
         raise loc.error(str(err), ("network",)) from None
 
 
+def _search_dir(loc: Locations) -> Path | None:
+    """The config file's folder: where a user's ``module:Class`` is also looked for."""
+    file = Path(loc.source)
+    return file.resolve().parent if file.is_file() else None
+
+
 def _check_network(cfg: ExperimentConfig, loc: Locations) -> None:
     validate = optional("flowrun.networks.registry", "validate_network")
     if validate is None:
         return
     params = dict(cfg.network.net_params.additional_params)
     try:
-        validate(cfg.network.type, params, cfg.vehicles, cfg.initial)
+        validate(cfg.network.type, params, cfg.vehicles, cfg.initial, _search_dir(loc))
     except ConfigError as err:
         raise loc.error(err.message, ("network", *sub_path(err.path))) from None
 

@@ -27,7 +27,8 @@ from flowrun.networks.registry import network_class
 def make_network(cfg: ExperimentConfig) -> Network:
     """The network object of a config, with its traffic-light programs (the declared ones,
     or those of ``traffic_lights.controller``)."""
-    cls = network_class(cfg.network.type)
+    search_dir = Path(cfg.source).resolve().parent if cfg.source else None
+    cls = network_class(cfg.network.type, search_dir)
     tls = cfg.traffic_lights
     network = cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial, tls.programs)
     if tls.controller is not None:

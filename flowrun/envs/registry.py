@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-import contextlib
 import importlib
-import pkgutil
-import sys
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -13,6 +10,7 @@ from typing import Any
 import gymnasium
 
 from flowrun.errors import ConfigError
+from flowrun.import_path import import_near
 from flowrun.suggest import did_you_mean, unknown_name
 
 
@@ -115,53 +113,9 @@ def resolve_env_class(name: str | None, search_dir: str | Path | None = None) ->
             )
         return builtin[name]
     module_name, _, attr = name.partition(":")
-    module = _import(module_name, name, None if search_dir is None else Path(search_dir))
+    folder = None if search_dir is None else Path(search_dir)
+    module = import_near(module_name, name, folder, "environment", "env.class")
     return _env_class(module, module_name, attr, name)
-
-
-def _import(module_name: str, name: str, search_dir: Path | None) -> ModuleType:
-    """Import ``module_name``, from ``search_dir`` too when it holds the top-level package."""
-    top = module_name.split(".")[0]
-    try:
-        return importlib.import_module(module_name)
-    except ModuleNotFoundError as err:
-        here = search_dir is not None and (
-            (search_dir / top).is_dir() or (search_dir / f"{top}.py").is_file()
-        )
-        if err.name != top or not here:
-            raise _import_error(module_name, name, err, search_dir) from err
-    if str(search_dir) not in sys.path:
-        sys.path.append(str(search_dir))
-    importlib.invalidate_caches()
-    try:
-        return importlib.import_module(module_name)
-    except ImportError as err:
-        raise _import_error(module_name, name, err, search_dir) from err
-
-
-def _import_error(
-    module_name: str, name: str, err: ImportError, search_dir: Path | None
-) -> ConfigError:
-    missing = getattr(err, "name", None) or ""
-    parent = missing.rpartition(".")[0]
-    hint = ""
-    if missing and module_name.startswith(missing):
-        # The module itself (not one of its imports) is missing: suggest a sibling module.
-        places: list[str] = []
-        if parent:
-            with contextlib.suppress(ImportError):
-                places = list(getattr(importlib.import_module(parent), "__path__", []))
-        elif search_dir is not None:
-            places = [str(search_dir)]
-        prefix = f"{parent}." if parent else ""
-        names = [prefix + m.name for m in pkgutil.iter_modules(places)]
-        hint = did_you_mean(missing, names) if names else ""
-    where = f" (looked in {search_dir} too)" if search_dir is not None else ""
-    return ConfigError(
-        f"cannot import module '{module_name}' for environment '{name}': {err}{hint}{where}; "
-        "put the package next to the config file, install it, or add its folder to PYTHONPATH",
-        path="env.class",
-    )
 
 
 def _env_class(module: ModuleType, module_name: str, attr: str, name: str) -> type:
