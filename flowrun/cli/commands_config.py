@@ -9,8 +9,6 @@ from typing import Annotated
 import typer
 
 from flowrun.cli.common import SeedOpt, SetOpt, guarded, overrides_with_seed
-from flowrun.config import dump_config
-from flowrun.config.preflight import validate_config
 from flowrun.errors import ConfigError
 from flowrun.suggest import unknown_name
 
@@ -60,6 +58,9 @@ def register(app: typer.Typer) -> None:
         as it would in baseline/train. --set and --seed as in baseline/train, e.g.
         --set sim.step=0.5 --set vehicles[0].count=10.
         """
+        from flowrun.config import dump_config
+        from flowrun.config.preflight import validate_config
+
         cfg = validate_config(config, overrides_with_seed(set_, seed))
         typer.echo(dump_config(cfg), nl=False)
 

@@ -37,7 +37,6 @@ from typing import TYPE_CHECKING, Annotated, Any, ParamSpec, TypeVar
 import typer
 
 from flowrun.errors import FlowrunError
-from flowrun.experiment.rundir import Interrupted, exit_code_of
 
 if TYPE_CHECKING:
     from flowrun.config.model import ExperimentConfig
@@ -177,6 +176,8 @@ def sigterm_as_interrupt() -> Iterator[None]:
     Ctrl-C raises :class:`Interrupted` too, so the exit code can tell the two apart.
     """
 
+    from flowrun.experiment.rundir import Interrupted
+
     def handler(signum: int, frame: Any) -> None:
         raise Interrupted(signum)
 
@@ -192,6 +193,8 @@ def interrupt_between_steps() -> Iterator[Callable[[], None]]:
     came. Raising from inside the signal handler could land in the middle of writing the log
     (the mcap writer compressing a chunk) and silently drop that chunk's steps.
     """
+    from flowrun.experiment.rundir import Interrupted
+
     received: list[int] = []
 
     def handler(signum: int, frame: Any) -> None:
@@ -209,5 +212,7 @@ def interrupt_between_steps() -> Iterator[Callable[[], None]]:
 
 def interrupted_exit(err: KeyboardInterrupt, message: str) -> typer.Exit:
     """Print ``interrupted: message`` and return the exit to raise (130 SIGINT, 143 SIGTERM)."""
+    from flowrun.experiment.rundir import exit_code_of
+
     typer.secho(f"interrupted: {message}", err=True, fg=typer.colors.YELLOW)
     return typer.Exit(code=exit_code_of(err))

@@ -1,0 +1,74 @@
+"""Start-up: ``flowrun --help``/``--version``/``list`` import only what they need; the lazy
+command group finds every command."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from flowrun import __version__
+from flowrun.cli.main import COMMANDS, app, load_commands
+
+ROOT = Path(__file__).resolve().parent.parent
+HEAVY = ("matplotlib", "torch", "stable_baselines3", "libsumo", "flowrun.replay", "rich")
+
+
+def modules_after(*argv: str) -> set[str]:
+    """The modules imported by ``flowrun ARGV`` in a fresh interpreter."""
+    code = (
+        "import sys, json\n"
+        "from flowrun.cli.main import main\n"
+        f"sys.argv = ['flowrun', *{list(argv)!r}]\n"
+        "try:\n    main()\nexcept SystemExit:\n    pass\n"
+        "print(json.dumps(sorted(sys.modules)), file=sys.stderr)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True
+    )
+    return set(json.loads(done.stderr.strip().splitlines()[-1]))
+
+
+@pytest.mark.parametrize("argv", [("--help",), ("--version",), ("list", "controllers")])
+def test_quick_commands_import_no_heavy_library(argv: tuple[str, ...]) -> None:
+    loaded = modules_after(*argv)
+    assert not [m for m in loaded if m.split(".")[0] in HEAVY or m in HEAVY]
+    assert "flowrun.cli.commands_run" not in loaded
+
+
+def test_version_prints_the_package_version() -> None:
+    result = CliRunner().invoke(app, ["--version"])
+    assert result.exit_code == 0
+    assert result.output == f"flowrun {__version__}\n"
+
+
+def test_help_lists_every_command_with_its_line() -> None:
+    result = CliRunner().invoke(app, ["--help"], terminal_width=80)
+    assert result.exit_code == 0
+    for name, (_, line) in COMMANDS.items():
+        assert f"{name}  " in result.output and line in result.output
+    assert max(len(row) for row in result.output.splitlines()) <= 80
+
+
+def test_every_listed_command_is_registered_by_its_module() -> None:
+    for name, (module, _) in COMMANDS.items():
+        assert name in load_commands(module), f"{module} does not register {name}"
+
+
+def test_a_command_runs_through_the_lazy_group() -> None:
+    group = typer.main.get_command(app)
+    assert list(group.commands) == list(COMMANDS)  # type: ignore[attr-defined]
+    result = CliRunner().invoke(app, ["list", "controllers"])
+    assert result.exit_code == 0
+    assert "IDM" in result.output.split()
+
+
+def test_unknown_command_is_refused_with_a_suggestion() -> None:
+    result = CliRunner().invoke(app, ["baselin"])
+    assert result.exit_code == 2
+    assert "baseline" in result.output
