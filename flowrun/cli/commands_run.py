@@ -110,7 +110,12 @@ def baseline(
     no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
     record_every: Annotated[int, typer.Option("--record-every", help="Log every N-th step.")] = 1,
     render: Annotated[
-        bool, typer.Option("--render", help="Write run 0 as an animated GIF.")
+        bool,
+        typer.Option(
+            "--render",
+            help="Write run 0 as an animation of the traffic on its road "
+            "(render.gif; render.mp4 too where ffmpeg is installed).",
+        ),
     ] = False,
     folder: Annotated[
         Path | None, typer.Option("--folder", hidden=True, help="Exact run folder (sweeps).")
@@ -171,6 +176,13 @@ def baseline(
     if result.signals:
         how = result.signal_controller or "the network's programs / the env's actions"
         console.print(signals_table(f"signal control: {how}", result.signals))
+    if result.animation is not None:
+        console.print(
+            f"wrote {result.animation.gif}"
+            + (f" and {result.animation.mp4}" if result.animation.mp4 else "")
+        )
+        if result.animation.note:
+            typer.secho(f"note: {result.animation.note}", err=True, fg=typer.colors.YELLOW)
     console.print(f"run folder: {result.run_dir}")
 
 

@@ -28,7 +28,7 @@ from flowrun.config.validate import check_params
 from flowrun.controllers.drivers import FlowStyleDriver, GroupRouters, bind_per_vehicle_groups
 from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.envs.frames import StepRecord, complete_frames, step_record
-from flowrun.envs.render import render_ring
+from flowrun.envs.render import EnvPainter
 from flowrun.envs.vehicles import (
     FlowControllers,
     GroupControl,
@@ -70,7 +70,7 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         network: the network with its vehicles and initial placement.
         simulator: accepted for Flow compatibility (``"traci"``); libsumo always runs
             headless, sumo-gui over TraCI when ``sim_params.render`` and a display exist.
-        render_mode: ``None`` or ``"rgb_array"`` (a top-down picture of the ring).
+        render_mode: ``None`` or ``"rgb_array"`` (a top-down picture of the road and cars).
         work_dir: folder for generated SUMO files; a private temporary folder by default.
 
     Episode: ``reset`` restarts SUMO with the initial configuration (perturbation drawn from
@@ -144,6 +144,7 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         self._needs_reset = True
         self._closed = False
         self._space_cache: tuple[gymnasium.Space[Any], gymnasium.Space[Any]] | None = None
+        self._painter: EnvPainter | None = None
         self._placement: RingPlacement | None = None
         self._clipper: ActionClipper | None = None
         #: RL cars waiting for a controlled place (Flow's ``rl_queue``) and the controlled
@@ -213,6 +214,8 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         if seed is None and self._np_random is None:
             seed = int(self.sim_params.seed or 0)
         super().reset(seed=seed)
+        if self._painter is not None:
+            self._painter.reset()
         self.network = self.episode_network()
         self.scenario = self.network
         self.rl_queue.clear()
@@ -382,10 +385,14 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
             self.records.append(step_record(self.k, step, self.record_frames, deferred))
 
     def render(self) -> Any:
-        """A top-down RGB picture of the ring (``render_mode="rgb_array"``), else ``None``."""
+        """A top-down RGB picture of the traffic on its road (``render_mode="rgb_array"``:
+        lane shapes of the network, cars coloured by speed on a scale that grows with the
+        fastest car of the episode, AVs outlined, signal states), else ``None``."""
         if self.render_mode != "rgb_array" or (self._needs_reset and not self.k.started):
             return None
-        return render_ring(self.k)
+        if self._painter is None:
+            self._painter = EnvPainter()
+        return self._painter(self.k)
 
     def terminate(self) -> None:
         """Flow's name for :meth:`close`."""

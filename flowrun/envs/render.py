@@ -1,86 +1,108 @@
-"""A top-down picture of a ring: cars coloured by speed, RL cars outlined (no display needed)."""
+"""Pictures of a running simulation on its own road (``rgb_array``, ``baseline --render``).
+
+:func:`render_kernel` is the one call "draw this env state as an RGB array"; :class:`EnvPainter`
+keeps the road (read once from the network file) and a speed scale that only grows within an
+episode, so an ``rgb_array`` stream keeps its colours meaning the same.
+"""
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+from dataclasses import replace
+from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageDraw
+import numpy.typing as npt
 
+from flowrun.envs.frames import snapshot_frame, snapshot_signals
 from flowrun.kernel import Kernel
+from flowrun.render import Painter, Road, Snapshot, ring_road, road_from_net_xml, speed_top
 
-SIZE = 400
-BACKGROUND = (245, 245, 245)
-ROAD = (90, 90, 90)
-RL_OUTLINE = (30, 60, 230)
+RGB = npt.NDArray[np.uint8]
 
 
-def speed_colour(speed: float, v_max: float) -> tuple[int, int, int]:
-    """Red (stopped) through yellow to green (``v_max`` or faster)."""
-    f = min(max(speed / v_max, 0.0), 1.0) if v_max > 0 else 0.0
-    if f < 0.5:
-        return 220, int(40 + 400 * f), 40
-    return int(220 - 400 * (f - 0.5)), 220, 40
+@lru_cache(maxsize=8)
+def _road_of_file(path: str, mtime_ns: int) -> Road:
+    return road_from_net_xml(Path(path).read_bytes())
 
 
-@dataclass(frozen=True)
-class RingLayout:
-    """Where the ring and its cars are drawn, in pixels (x right, y down).
-
-    Attributes:
-        centre: the ring's centre (x and y).
-        inner: inner radius of the road.
-        outer: outer radius of the road.
-        lane_width: width of one lane.
-        cars: ``(n, 2)`` centre of every car, in the kernel's vehicle order.
-    """
-
-    centre: float
-    inner: float
-    outer: float
-    lane_width: float
-    cars: np.ndarray
-
-    @property
-    def car_radius(self) -> float:
-        """Radius of the disc drawn for a car."""
-        return self.lane_width * 0.45
-
-
-def ring_layout(k: Kernel, size: int = SIZE) -> RingLayout:
-    """The geometry of :func:`render_ring`: position 0 at the bottom, driving anticlockwise."""
+def kernel_road(k: Kernel) -> Road:
+    """The road of the kernel's network: its ``.net.xml`` lane shapes (a circle of the
+    network's length when there is no network file)."""
+    net = k.net_file
+    if net is not None and net.is_file():
+        return _road_of_file(str(net), net.stat().st_mtime_ns)
     spec = k.network.spec
-    c = size / 2
-    radius = size * 0.4
-    lanes = max(e.lanes for e in spec.edges)
-    lane_w = max(6.0, size * 0.03)
-    inner = radius - lanes * lane_w / 2
-    vk = k.vehicle
-    theta = -math.pi / 2 + 2 * math.pi * np.asarray(vk.position, dtype=np.float64) / spec.length
-    r = inner + (np.asarray(vk.lanes, dtype=np.float64) + 0.5) * lane_w
-    cars = np.stack([c + r * np.cos(theta), c - r * np.sin(theta)], axis=-1).reshape(-1, 2)
-    return RingLayout(c, inner, radius + lanes * lane_w / 2, lane_w, cars)
+    return ring_road(float(spec.length), max((e.lanes for e in spec.edges), default=1))
 
 
-def render_ring(k: Kernel, size: int = SIZE) -> np.ndarray:
-    """RGB array ``(size, size, 3)`` of the ring with every car drawn at its ring position."""
-    layout = ring_layout(k, size)
-    img = Image.new("RGB", (size, size), BACKGROUND)
-    draw = ImageDraw.Draw(img)
-    c, outer, inner = layout.centre, layout.outer, layout.inner
-    draw.ellipse([c - outer, c - outer, c + outer, c + outer], fill=ROAD)
-    draw.ellipse([c - inner, c - inner, c + inner, c + inner], fill=BACKGROUND)
+def _map_xy(k: Kernel) -> tuple[np.ndarray, np.ndarray]:
+    """Every car's map position, m, also where the kernel does not read it every step."""
     vk = k.vehicle
-    v_max = k.network.max_speed()
-    half = layout.car_radius
-    for i, (x, y) in enumerate(layout.cars.tolist()):
-        rl = bool(vk.table.is_rl[i])
-        draw.ellipse(
-            [x - half, y - half, x + half, y + half],
-            fill=speed_colour(float(vk.speed[i]), v_max),
-            outline=RL_OUTLINE if rl else None,
-            width=3 if rl else 1,
-        )
-    draw.text((8, 8), f"t = {k.simulation.time:.1f} s", fill=(0, 0, 0))
-    return np.asarray(img, dtype=np.uint8)
+    if vk.read_xy:
+        return vk.x, vk.y
+    if vk.ring_path:
+        return vk.placement().xy(np.asarray(vk.position), np.asarray(vk.lanes))
+    pts = np.array([vk.get_2d_position(v) for v in vk.get_ids()], dtype=np.float64)
+    pts = pts.reshape(-1, 2)
+    return pts[:, 0], pts[:, 1]
+
+
+def snapshot(k: Kernel) -> Snapshot:
+    """The cars (and lights) of the kernel's current step, to draw now or later."""
+    signals = snapshot_signals(k, 0)
+    x, y = _map_xy(k)
+    frame = replace(snapshot_frame(k, 0), x=x, y=y)
+    return Snapshot(frame, None if signals is None else (signals.ids, signals.states))
+
+
+def vehicle_lengths(k: Kernel) -> dict[str, float]:
+    """Length of each vehicle group's cars, m (what the pictures draw)."""
+    lengths = {}
+    for cls in k.vehicle.table.classes:
+        length = getattr(cls, "length", None)
+        if isinstance(length, int | float) and length > 0:
+            lengths[str(cls.name)] = float(length)
+    return lengths
+
+
+def render_kernel(k: Kernel, top: float | None = None, size: int = 720) -> RGB:
+    """The simulation's current state as an RGB array ``(height, width, 3)``: the road from the
+    network's lane shapes, cars coloured by speed from 0 to ``top`` m/s (default: a round
+    number at or above the fastest car now), AVs outlined, signal states at their junctions."""
+    shot = snapshot(k)
+    speed = np.asarray(shot.frame.speed)
+    if top is None:
+        top = speed_top(float(speed.max()) if speed.size else 0.0)
+    return Painter(kernel_road(k), top, size=size, lengths=vehicle_lengths(k)).draw(
+        shot.frame, shot.signals
+    )
+
+
+class EnvPainter:
+    """The ``rgb_array`` renderer of one env: the painter is rebuilt only when the network
+    file or the speed scale changes; the scale is the fastest speed seen this episode,
+    rounded up (:func:`~flowrun.render.speed_top`)."""
+
+    def __init__(self, size: int = 720) -> None:
+        self.size = size
+        self.fastest = 0.0
+        self._key: tuple[object, float] | None = None
+        self._painter: Painter | None = None
+
+    def reset(self) -> None:
+        """Start a new episode's scale."""
+        self.fastest = 0.0
+
+    def __call__(self, k: Kernel) -> RGB:
+        shot = snapshot(k)
+        speed = np.asarray(shot.frame.speed)
+        if speed.size:
+            self.fastest = max(self.fastest, float(speed.max()))
+        top = speed_top(self.fastest)
+        road = kernel_road(k)
+        key = (id(road), top)
+        if self._painter is None or key != self._key:
+            self._painter = Painter(road, top, size=self.size, lengths=vehicle_lengths(k))
+            self._key = key
+        return self._painter.draw(shot.frame, shot.signals)

@@ -15,6 +15,7 @@ from flowrun.config.model import ExperimentConfig
 from flowrun.envs.base import Env
 from flowrun.envs.factory import env_class, make_env
 from flowrun.envs.frames import network_metadata
+from flowrun.envs.render import kernel_road, snapshot, vehicle_lengths
 from flowrun.errors import ConfigError
 from flowrun.experiment.metrics import RunMetrics
 from flowrun.experiment.rundir import (
@@ -32,6 +33,7 @@ from flowrun.experiment.runner import Experiment, FrameSink
 from flowrun.experiment.signal_baselines import SignalMetrics, SignalRun
 from flowrun.fastring.plan import refuse_numpy_backend
 from flowrun.recording.writer import McapRecorder
+from flowrun.render import Animation, Road, Snapshot, draw_run, write_animation
 
 log = logging.getLogger(__name__)
 
@@ -53,6 +55,8 @@ class BaselineResult:
             time, throughput, queue, cars waiting at the end); empty otherwise.
         signal_controller: ``traffic_lights.controller`` (``None``: the network's programs
             or the environment's actions).
+        animation: with ``render``: run 0's ``render.gif`` (and ``render.mp4`` where ffmpeg
+            is installed, else a note why not).
     """
 
     run_dir: Path
@@ -61,6 +65,7 @@ class BaselineResult:
     status: str = "complete"
     signals: list[SignalMetrics] = field(default_factory=list)
     signal_controller: str | None = None
+    animation: Animation | None = None
 
 
 def resolve_steps(cfg: ExperimentConfig, steps: int | None) -> int:
@@ -201,7 +206,7 @@ def _run(
             )  # fmt: skip
         raise
     logs: list[Path] = []
-    gif_frames: list[Any] = []
+    film = _Film() if render else None
 
     def sink(run: int) -> FrameSink:
         path = run_dir / f"run_{run}.mcap"
@@ -209,14 +214,14 @@ def _run(
         return open_run_log(path, env, cfg, seed + run, run, record_every)
 
     def on_step(run: int, step: int) -> None:
-        if render and run == 0 and step % GIF_EVERY == 0:
-            gif_frames.append(env.render())
+        if film is not None and run == 0 and step % GIF_EVERY == 0:
+            film.take(env)
         if progress is not None:
             progress(run, step)
 
     has_lights = any(n.type == "traffic_light" for n in env.network.spec.nodes)
     signals = SignalRun(cfg.traffic_lights) if has_lights else None
-    hooks = _Bookkeeping(signals)
+    hooks = _Bookkeeping(signals, film)
     experiment = Experiment(
         env, sink_factory=sink if record else None, progress=on_step, hooks=hooks
     )
@@ -258,24 +263,54 @@ def _run(
         raise
     env.close()
     write_json(run_dir / "metrics.json", summary(COMPLETE))
-    if gif_frames:
-        write_gif(run_dir / "render.gif", gif_frames)
+    animation = film.write(run_dir / "render") if film is not None else None
     signal_runs = signals.results if signals is not None else []
     return BaselineResult(
-        run_dir, experiment.metrics, logs, COMPLETE, signal_runs, cfg.traffic_lights.controller
-    )
+        run_dir, experiment.metrics, logs, COMPLETE, signal_runs, cfg.traffic_lights.controller,
+        animation,
+    )  # fmt: skip
+
+
+class _Film:
+    """Run 0's pictures for ``--render``: the cars every ``GIF_EVERY`` steps from the start,
+    drawn at the end on one speed scale (the run's fastest car) on the network's road."""
+
+    def __init__(self) -> None:
+        self.shots: list[Snapshot] = []
+        self.road: Road | None = None
+        self.lengths: dict[str, float] = {}
+        self.resets = 0
+
+    def take(self, env: Env) -> None:
+        if self.road is None:
+            self.road = kernel_road(env.k)
+            self.lengths = vehicle_lengths(env.k)
+        self.shots.append(snapshot(env.k))
+
+    def on_reset(self, env: Env) -> None:
+        self.resets += 1
+        if self.resets == 1:
+            self.take(env)  # the start (after the warm-up) is the first frame
+
+    def write(self, stem: Path) -> Animation | None:
+        if not self.shots:
+            return None
+        return write_animation(stem, draw_run(self.road, self.shots, self.lengths), fps=10.0)
 
 
 class _Bookkeeping:
     """Hooks around every run: the signal controller (if any), each run's outflow, and
     ``metrics.json`` saved after every run (a killed run keeps the runs it finished)."""
 
-    def __init__(self, signals: SignalRun | None) -> None:
+    def __init__(self, signals: SignalRun | None, film: _Film | None = None) -> None:
         self.signals = signals
+        self.film = film
         self.outflows: list[float] = []
         self.save: Callable[[], None] | None = None
 
     def on_reset(self, env: Env) -> None:
+        if self.film is not None:
+            self.film.on_reset(env)
         if self.signals is not None:
             self.signals.on_reset(env)
 
@@ -297,12 +332,3 @@ class _Bookkeeping:
                 self.save()
             except OSError as err:  # reported by the final write, or by what interrupted us
                 log.info("metrics.json not updated: %s", err)
-
-
-def write_gif(path: Path, frames: list[Any]) -> None:
-    """Write RGB arrays as an animated GIF."""
-    from PIL import Image
-
-    images = [Image.fromarray(f) for f in frames if f is not None]
-    if images:
-        images[0].save(path, save_all=True, append_images=images[1:], duration=100, loop=0)
