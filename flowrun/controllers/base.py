@@ -20,11 +20,19 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from flowrun.controllers._checks import number
 from flowrun.controllers.fail_safe import apply_fail_safes, check_fail_safe
 from flowrun.controllers.limits import DEFAULT_MAX_ACCEL, DEFAULT_MAX_DECEL, vehicle_limits
+from flowrun.controllers.params import (
+    Param,
+    ParameterValueError,
+    anything,
+    check_params,
+)
 from flowrun.controllers.view import flow_action, read_inputs
 from flowrun.types import CarFollowingInputs, FloatArray
+
+#: Flow's ``fail_safe`` argument: a name, a list of names, or ``None``.
+FailSafe = str | Sequence[str] | None
 
 
 def make_inputs(
@@ -74,6 +82,34 @@ def make_inputs(
     )
 
 
+def _veh_id(owner: str, name: str, value: Any) -> str | None:
+    if value is not None and not isinstance(value, str):
+        raise ParameterValueError(
+            f"{owner}: {name} must be a vehicle id string, got {value!r}", name
+        )
+    return value
+
+
+#: The parameters every acceleration controller takes (Flow's ``BaseController``); a
+#: built-in declares them among its own, in Flow's order, with :func:`declared`.
+VEH_ID = Param("veh_id", None, "", "Flow's vehicle id", convert=_veh_id)
+CAR_FOLLOWING_PARAMS = Param(
+    "car_following_params", None, "", "the vehicle type's SumoCarFollowingParams",
+    convert=anything,
+)  # fmt: skip
+TIME_DELAY = Param("time_delay", 0.0, "s", "reaction delay of the safe_velocity fail-safe", low=0)
+NOISE = Param("noise", 0.0, "m/s^2", "std of the acceleration noise (times sqrt(dt))", low=0)
+FAIL_SAFE = Param(
+    "fail_safe", None, "", "fail-safe name(s) run on each command",
+    convert=lambda owner, name, value: check_fail_safe(value),
+)  # fmt: skip
+DISPLAY_WARNINGS = Param(
+    "display_warnings", True, "", "accepted for Flow (flowrun never prints)",
+    convert=lambda owner, name, value: bool(value),
+)  # fmt: skip
+BASE_PARAMS = (VEH_ID, CAR_FOLLOWING_PARAMS, TIME_DELAY, FAIL_SAFE, NOISE, DISPLAY_WARNINGS)
+
+
 class AccelerationController:
     """Base of all acceleration controllers.
 
@@ -84,6 +120,11 @@ class AccelerationController:
     The constructor is Flow's ``BaseController(veh_id, car_following_params, delay=0,
     fail_safe=None, noise=0, display_warnings=True)``. When the kernel's inputs carry no
     ``max_accel`` / ``max_decel``, the limits of ``car_following_params`` are used instead.
+
+    **Built-in controllers** are dataclasses over this base: their fields are their
+    constructor's arguments in Flow's order, each declared once with its default, unit and
+    bounds (:mod:`flowrun.controllers.params`); the shared ones are :data:`BASE_PARAMS`.
+    The generated constructor ends in :meth:`__post_init__`, which checks them all.
 
     **Flow-style controllers.** A subclass that implements Flow's per-vehicle
     ``get_accel(self, env)`` instead of ``_accel`` is a *per-vehicle* controller
@@ -118,28 +159,38 @@ class AccelerationController:
     #: ``True`` for a Flow-style subclass whose ``get_accel(env)`` drives one vehicle
     per_vehicle: ClassVar[bool] = False
 
+    veh_id: str | None = None
+    car_following_params: Any = None
+    time_delay: float = 0.0
+    noise: float = 0.0
+    fail_safe: FailSafe = ()
+    display_warnings: bool = True
+
     def __init__(
         self,
         veh_id: str | None = None,
         car_following_params: Any = None,
         delay: float = 0.0,
-        fail_safe: str | Sequence[str] | None = None,
+        fail_safe: FailSafe = None,
         noise: float = 0.0,
         display_warnings: bool = True,
         *,
         time_delay: float | None = None,
     ) -> None:
-        me = type(self).__name__
-        self.noise = number(me, "noise", noise, low=0)
-        self.fail_safe: tuple[str, ...] = check_fail_safe(fail_safe)
-        delay = delay if time_delay is None else time_delay
-        self.time_delay = number(me, "time_delay", delay, low=0)
-        if veh_id is not None and not isinstance(veh_id, str):
-            raise ValueError(f"{me}: veh_id must be a vehicle id string, got {veh_id!r}")
         self.veh_id = veh_id
         self.car_following_params = car_following_params
-        self.display_warnings = bool(display_warnings)
-        self._limits = vehicle_limits(car_following_params)
+        self.time_delay = delay if time_delay is None else time_delay
+        self.fail_safe = fail_safe
+        self.noise = noise
+        self.display_warnings = display_warnings
+        self.__post_init__()
+
+    def __post_init__(self) -> None:
+        """Check the declared parameters (see :mod:`flowrun.controllers.params`)."""
+        check_params(self, BASE_PARAMS)
+        #: the fail-safes run on every command, in order
+        self.fail_safes: tuple[str, ...] = check_fail_safe(self.fail_safe)
+        self._limits = vehicle_limits(self.car_following_params)
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -191,8 +242,8 @@ class AccelerationController:
             return accel
         if self.noise > 0:
             accel = accel + math.sqrt(inputs.dt) * rng.normal(0.0, self.noise, inputs.size)
-        if self.fail_safe:
-            accel = apply_fail_safes(self.fail_safe, accel, inputs, self.time_delay)
+        if self.fail_safes:
+            accel = apply_fail_safes(self.fail_safes, accel, inputs, self.time_delay)
         return accel
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:

@@ -10,21 +10,28 @@ the same, using ``inputs.max_accel`` (the vehicle type's ``accel``, filled by th
 from the controller's ``car_following_params``) or, when neither is known, SUMO's default
 2.6 m/s^2.
 
-The constructors take Flow's leading ``veh_id`` (and ``car_following_params`` where Flow
-has it), so ``IDMController("human_0", car_following_params=...)`` works as in Flow.
+Each class declares its parameters once, as dataclass fields in the order of Flow's
+constructor (name, default, unit, bounds: :mod:`flowrun.controllers.params`), so
+``IDMController("human_0", car_following_params=...)`` works as in Flow.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from flowrun.controllers._checks import number
 from flowrun.controllers.base import (
+    CAR_FOLLOWING_PARAMS,
     DEFAULT_MAX_ACCEL,
+    DISPLAY_WARNINGS,
+    FAIL_SAFE,
+    NOISE,
+    TIME_DELAY,
+    VEH_ID,
     AccelerationController,
+    FailSafe,
 )
 from flowrun.controllers.car_following_formulas import (
     bando_ftl_accel,
@@ -35,8 +42,12 @@ from flowrun.controllers.car_following_formulas import (
     linear_ovm_accel,
     ovm_accel,
 )
+from flowrun.controllers.params import declared, flag, option, param
 from flowrun.flow_values import FLOW_ERROR, FLOW_NO_GAP
 from flowrun.types import CarFollowingInputs, FloatArray
+
+#: Gipps' decelerations are negative numbers, as in Flow
+_NEGATIVE = "a negative deceleration"
 
 
 def _free_road(inputs: CarFollowingInputs, accel: FloatArray) -> FloatArray:
@@ -45,37 +56,24 @@ def _free_road(inputs: CarFollowingInputs, accel: FloatArray) -> FloatArray:
     return np.where(inputs.has_leader, accel, max_accel)
 
 
+@dataclass(eq=False)
 class IDMController(AccelerationController):
     """Intelligent Driver Model (see :func:`idm_accel`); Flow's defaults."""
 
     registered_name = "IDM"
 
-    def __init__(
-        self,
-        veh_id: str | None = None,
-        v0: float = 30,
-        T: float = 1,
-        a: float = 1,
-        b: float = 1.5,
-        delta: float = 4,
-        s0: float = 2,
-        time_delay: float = 0.0,
-        noise: float = 0,
-        fail_safe: str | Sequence[str] | None = None,
-        display_warnings: bool = True,
-        car_following_params: Any = None,
-    ) -> None:
-        super().__init__(
-            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
-            car_following_params=car_following_params, display_warnings=display_warnings,
-        )  # fmt: skip
-        me = type(self).__name__
-        self.v0 = number(me, "v0", v0, low=0, strict=True, allow_inf=True)
-        self.T = number(me, "T", T, low=0)
-        self.a = number(me, "a", a, low=0, strict=True)
-        self.b = number(me, "b", b, low=0, strict=True)
-        self.delta = number(me, "delta", delta, low=0, strict=True)
-        self.s0 = number(me, "s0", s0, low=0)
+    veh_id: str | None = declared(VEH_ID)
+    v0: float = param(30, "m/s", "desired speed", low=0, strict=True, allow_inf=True)
+    T: float = param(1, "s", "desired time headway", low=0)
+    a: float = param(1, "m/s^2", "maximum acceleration", low=0, strict=True)
+    b: float = param(1.5, "m/s^2", "comfortable deceleration", low=0, strict=True)
+    delta: float = param(4, "", "acceleration exponent", low=0, strict=True)
+    s0: float = param(2, "m", "minimum gap", low=0)
+    time_delay: float = declared(TIME_DELAY)
+    noise: float = declared(NOISE)
+    fail_safe: FailSafe = declared(FAIL_SAFE)
+    display_warnings: bool = declared(DISPLAY_WARNINGS)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         return idm_accel(
@@ -84,35 +82,23 @@ class IDMController(AccelerationController):
         )  # fmt: skip
 
 
+@dataclass(eq=False)
 class CFMController(AccelerationController):
     """Linear car-following model (see :func:`cfm_accel`); max accel without a leader."""
 
     registered_name = "CFM"
 
-    def __init__(
-        self,
-        veh_id: str | None = None,
-        car_following_params: Any = None,
-        k_d: float = 1,
-        k_v: float = 1,
-        k_c: float = 1,
-        d_des: float = 1,
-        v_des: float = 8,
-        time_delay: float = 0.0,
-        noise: float = 0,
-        fail_safe: str | Sequence[str] | None = None,
-        display_warnings: bool = True,
-    ) -> None:
-        super().__init__(
-            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
-            car_following_params=car_following_params, display_warnings=display_warnings,
-        )  # fmt: skip
-        me = type(self).__name__
-        self.k_d = number(me, "k_d", k_d, low=0)
-        self.k_v = number(me, "k_v", k_v, low=0)
-        self.k_c = number(me, "k_c", k_c, low=0)
-        self.d_des = number(me, "d_des", d_des, low=0)
-        self.v_des = number(me, "v_des", v_des, low=0)
+    veh_id: str | None = declared(VEH_ID)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
+    k_d: float = param(1, "1/s^2", "gain on the gap error", low=0)
+    k_v: float = param(1, "1/s", "gain on the speed difference to the leader", low=0)
+    k_c: float = param(1, "1/s", "gain on the error to the desired speed", low=0)
+    d_des: float = param(1, "m", "desired gap", low=0)
+    v_des: float = param(8, "m/s", "desired speed", low=0)
+    time_delay: float = declared(TIME_DELAY)
+    noise: float = declared(NOISE)
+    fail_safe: FailSafe = declared(FAIL_SAFE)
+    display_warnings: bool = declared(DISPLAY_WARNINGS)
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         h = np.where(inputs.has_leader, inputs.headway, 0.0)
@@ -137,35 +123,23 @@ class BCMController(CFMController):
         return _free_road(inputs, accel)
 
 
+@dataclass(eq=False)
 class OVMController(AccelerationController):
     """Optimal Velocity Model (see :func:`ovm_accel`); max accel without a leader."""
 
     registered_name = "OVM"
 
-    def __init__(
-        self,
-        veh_id: str | None = None,
-        car_following_params: Any = None,
-        alpha: float = 1,
-        beta: float = 1,
-        h_st: float = 2,
-        h_go: float = 15,
-        v_max: float = 30,
-        time_delay: float = 0,
-        noise: float = 0,
-        fail_safe: str | Sequence[str] | None = None,
-        display_warnings: bool = True,
-    ) -> None:
-        super().__init__(
-            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
-            car_following_params=car_following_params, display_warnings=display_warnings,
-        )  # fmt: skip
-        me = type(self).__name__
-        self.alpha = number(me, "alpha", alpha, low=0)
-        self.beta = number(me, "beta", beta, low=0)
-        self.h_st = number(me, "h_st", h_st, low=0)
-        self.h_go = number(me, "h_go", h_go, low=self.h_st, strict=True)
-        self.v_max = number(me, "v_max", v_max, low=0)
+    veh_id: str | None = declared(VEH_ID)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
+    alpha: float = param(1, "1/s", "gain on the optimal-velocity error", low=0)
+    beta: float = param(1, "1/s", "gain on the speed difference to the leader", low=0)
+    h_st: float = param(2, "m", "gap below which the optimal velocity is 0", low=0)
+    h_go: float = param(15, "m", "gap above which it is v_max", low="h_st", strict=True)
+    v_max: float = param(30, "m/s", "maximum desired speed", low=0)
+    time_delay: float = declared(TIME_DELAY)
+    noise: float = declared(NOISE)
+    fail_safe: FailSafe = declared(FAIL_SAFE)
+    display_warnings: bool = declared(DISPLAY_WARNINGS)
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         accel = ovm_accel(
@@ -175,31 +149,21 @@ class OVMController(AccelerationController):
         return _free_road(inputs, accel)
 
 
+@dataclass(eq=False)
 class LinearOVM(AccelerationController):
     """Linear optimal-velocity model (see :func:`linear_ovm_accel`)."""
 
     registered_name = "LinearOVM"
 
-    def __init__(
-        self,
-        veh_id: str | None = None,
-        car_following_params: Any = None,
-        v_max: float = 30,
-        adaptation: float = 0.65,
-        h_st: float = 5,
-        time_delay: float = 0.0,
-        noise: float = 0,
-        fail_safe: str | Sequence[str] | None = None,
-        display_warnings: bool = True,
-    ) -> None:
-        super().__init__(
-            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
-            car_following_params=car_following_params, display_warnings=display_warnings,
-        )  # fmt: skip
-        me = type(self).__name__
-        self.v_max = number(me, "v_max", v_max, low=0)
-        self.adaptation = number(me, "adaptation", adaptation, low=0, strict=True)
-        self.h_st = number(me, "h_st", h_st, low=0)
+    veh_id: str | None = declared(VEH_ID)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
+    v_max: float = param(30, "m/s", "maximum desired speed", low=0)
+    adaptation: float = param(0.65, "s", "time to reach the optimal velocity", low=0, strict=True)
+    h_st: float = param(5, "m", "gap below which the optimal velocity is 0", low=0)
+    time_delay: float = declared(TIME_DELAY)
+    noise: float = declared(NOISE)
+    fail_safe: FailSafe = declared(FAIL_SAFE)
+    display_warnings: bool = declared(DISPLAY_WARNINGS)
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         return linear_ovm_accel(
@@ -208,6 +172,7 @@ class LinearOVM(AccelerationController):
         )  # fmt: skip
 
 
+@dataclass(eq=False)
 class BandoFTLController(AccelerationController):
     """Bando optimal velocity with a follow-the-leader term (see :func:`bando_ftl_accel`).
 
@@ -216,34 +181,18 @@ class BandoFTLController(AccelerationController):
 
     registered_name = "BandoFTL"
 
-    def __init__(
-        self,
-        veh_id: str | None = None,
-        car_following_params: Any = None,
-        alpha: float = 0.5,
-        beta: float = 20,
-        h_st: float = 2,
-        h_go: float = 10,
-        v_max: float = 32,
-        want_max_accel: bool = False,
-        time_delay: float = 0,
-        noise: float = 0,
-        fail_safe: str | Sequence[str] | None = None,
-        display_warnings: bool = True,
-    ) -> None:
-        super().__init__(
-            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
-            car_following_params=car_following_params, display_warnings=display_warnings,
-        )  # fmt: skip
-        me = type(self).__name__
-        self.alpha = number(me, "alpha", alpha, low=0)
-        self.beta = number(me, "beta", beta, low=0)
-        self.h_st = number(me, "h_st", h_st, low=0, strict=True)
-        self.h_go = number(me, "h_go", h_go, low=0)
-        self.v_max = number(me, "v_max", v_max, low=0)
-        if not isinstance(want_max_accel, bool):
-            raise ValueError(f"{me}: want_max_accel must be true or false, got {want_max_accel!r}")
-        self.want_max_accel = want_max_accel
+    veh_id: str | None = declared(VEH_ID)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
+    alpha: float = param(0.5, "1/s", "gain on the optimal-velocity error", low=0)
+    beta: float = param(20, "m^2/s", "gain of the follow-the-leader term", low=0)
+    h_st: float = param(2, "m", "gap scale of the tanh velocity function", low=0, strict=True)
+    h_go: float = param(10, "m", "accepted for Flow, unused", low=0)
+    v_max: float = param(32, "m/s", "maximum desired speed", low=0)
+    want_max_accel: bool = option(False, "maximum acceleration without a leader", flag)
+    time_delay: float = declared(TIME_DELAY)
+    noise: float = declared(NOISE)
+    fail_safe: FailSafe = declared(FAIL_SAFE)
+    display_warnings: bool = declared(DISPLAY_WARNINGS)
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         h, v_lead = inputs.headway, inputs.leader_speed
@@ -261,40 +210,29 @@ class BandoFTLController(AccelerationController):
         return _free_road(inputs, accel) if self.want_max_accel else accel
 
 
+@dataclass(eq=False)
 class GippsController(AccelerationController):
     """Gipps' model (see :func:`gipps_accel`); ``b`` and ``b_l`` are negative, as in Flow."""
 
     registered_name = "Gipps"
 
-    def __init__(
-        self,
-        veh_id: str | None = None,
-        car_following_params: Any = None,
-        v0: float = 30,
-        acc: float = 1.5,
-        b: float = -1,
-        b_l: float = -1,
-        s0: float = 2,
-        tau: float = 1,
-        delay: float = 0,
-        noise: float = 0,
-        fail_safe: str | Sequence[str] | None = None,
-        display_warnings: bool = True,
-    ) -> None:
-        super().__init__(
-            noise=noise, fail_safe=fail_safe, time_delay=delay, veh_id=veh_id,
-            car_following_params=car_following_params, display_warnings=display_warnings,
-        )  # fmt: skip
-        me = type(self).__name__
-        self.v0 = number(me, "v0", v0, low=0, strict=True)
-        self.acc = number(me, "acc", acc, low=0, strict=True)
-        self.b = number(me, "b", b)
-        self.b_l = number(me, "b_l", b_l)
-        for name, value in (("b", self.b), ("b_l", self.b_l)):
-            if value >= 0:
-                raise ValueError(f"{me}: {name} must be a negative deceleration, got {value:g}")
-        self.s0 = number(me, "s0", s0, low=0)
-        self.tau = number(me, "tau", tau, low=0, strict=True)
+    veh_id: str | None = declared(VEH_ID)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
+    v0: float = param(30, "m/s", "desired speed", low=0, strict=True)
+    acc: float = param(1.5, "m/s^2", "maximum acceleration", low=0, strict=True)
+    b: float = param(-1, "m/s^2", "most severe braking", high=0, strict=True, what=_NEGATIVE)
+    b_l: float = param(-1, "m/s^2", "leader's most severe braking", high=0, strict=True,
+                       what=_NEGATIVE)  # fmt: skip
+    s0: float = param(2, "m", "minimum gap", low=0)
+    tau: float = param(1, "s", "reaction time", low=0, strict=True)
+    delay: float = declared(TIME_DELAY)
+    noise: float = declared(NOISE)
+    fail_safe: FailSafe = declared(FAIL_SAFE)
+    display_warnings: bool = declared(DISPLAY_WARNINGS)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self.time_delay = self.delay  # Flow's name here; the fail-safes read time_delay
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         return gipps_accel(
@@ -303,6 +241,7 @@ class GippsController(AccelerationController):
         )  # fmt: skip
 
 
+@dataclass(eq=False)
 class LACController(AccelerationController):
     """Linear adaptive cruise control (Flow's ``LACController``; stateful).
 
@@ -311,43 +250,26 @@ class LACController(AccelerationController):
     (Flow subtracts the ego's length from the bumper-to-bumper headway) and the speed error
     ``e_v = v_lead - v``: ``a <- a + dt * (u - a) / tau``. Without a leader ``u = 0`` (Flow
     has no such case: it would fail). The vehicle length is 5 m when the kernel gives none.
-
-    Args:
-        k_1: gain on the spacing error, 1/s^2.
-        k_2: gain on the speed error, 1/s.
-        h: desired time gap, s.
-        tau: lag between command and acceleration, s.
-        a: initial acceleration, m/s^2.
     """
 
     registered_name = "LAC"
     aliases = ("LACController",)
     stateful = True
 
-    def __init__(
-        self,
-        veh_id: str | None = None,
-        car_following_params: Any = None,
-        k_1: float = 0.3,
-        k_2: float = 0.4,
-        h: float = 1,
-        tau: float = 0.1,
-        a: float = 0,
-        time_delay: float = 0.0,
-        noise: float = 0,
-        fail_safe: str | Sequence[str] | None = None,
-        display_warnings: bool = True,
-    ) -> None:
-        super().__init__(
-            noise=noise, fail_safe=fail_safe, time_delay=time_delay, veh_id=veh_id,
-            car_following_params=car_following_params, display_warnings=display_warnings,
-        )  # fmt: skip
-        me = type(self).__name__
-        self.k_1 = number(me, "k_1", k_1)
-        self.k_2 = number(me, "k_2", k_2)
-        self.h = number(me, "h", h, low=0)
-        self.tau = number(me, "tau", tau, low=0, strict=True)
-        self.a = number(me, "a", a)
+    veh_id: str | None = declared(VEH_ID)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
+    k_1: float = param(0.3, "1/s^2", "gain on the spacing error")
+    k_2: float = param(0.4, "1/s", "gain on the speed error")
+    h: float = param(1, "s", "desired time gap", low=0)
+    tau: float = param(0.1, "s", "lag between command and acceleration", low=0, strict=True)
+    a: float = param(0, "m/s^2", "initial acceleration")
+    time_delay: float = declared(TIME_DELAY)
+    noise: float = declared(NOISE)
+    fail_safe: FailSafe = declared(FAIL_SAFE)
+    display_warnings: bool = declared(DISPLAY_WARNINGS)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
         self._state = np.zeros(0)
 
     def reset(self, num_vehicles: int) -> None:

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from flowrun.controllers._checks import ParameterValueError
+from flowrun.controllers.params import ParameterValueError
 from flowrun.suggest import did_you_mean
 from flowrun.types import CarFollowingInputs, FloatArray
 

@@ -30,6 +30,7 @@ from flowrun.controllers.lane_change import (
     StaticLaneChanger,
 )
 from flowrun.controllers.minicity_router import MinicityRouter
+from flowrun.controllers.params import Param, parameters
 from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.controllers.rl import RLController, SimCarFollowingController
 from flowrun.controllers.routing import ContinuousRouter, GridRouter, Router
@@ -104,6 +105,35 @@ def controller_names(kind: ControllerKind | None = None) -> list[str]:
         for cls in _BUILTIN
         if kind is None or controller_kind(cls) == kind
     ]
+
+
+def controller_parameters(cls: type) -> tuple[Param, ...]:
+    """The parameters a config may give controller ``cls`` (Flow's per-vehicle arguments,
+    :data:`FLOW_ONLY_PARAMS`, left out), in constructor order."""
+    return tuple(p for p in parameters(cls) if p.name not in FLOW_ONLY_PARAMS)
+
+
+def controller_lines() -> list[str]:
+    """``flowrun list controllers``: per built-in controller, a line with its name, class and
+    kind, then one indented line per parameter: name, default, unit, bounds and meaning."""
+    lines = []
+    for cls in _BUILTIN:
+        name = str(getattr(cls, "registered_name", cls.__name__))
+        lines.append(f"{name}  ({cls.__name__}, {controller_kind(cls).replace('_', '-')})")
+        for p in controller_parameters(cls):
+            unit = f" {p.unit}" if p.unit and p.default is not None else ""
+            bounds = f", {p.bounds}" if p.bounds else ""
+            lines.append(f"    {p.name} = {_shown(p.default)}{unit}{bounds}: {p.doc}")
+    return lines
+
+
+def _shown(value: Any) -> str:
+    """A default as a config would write it."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
 
 
 def _article(kind: ControllerKind) -> str:

@@ -6,14 +6,21 @@ Both return ``nan`` for every vehicle; the kernel must check the class attribute
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from flowrun.controllers.base import AccelerationController
+from flowrun.controllers.base import (
+    CAR_FOLLOWING_PARAMS,
+    VEH_ID,
+    AccelerationController,
+)
+from flowrun.controllers.params import declared
 from flowrun.types import CarFollowingInputs, FloatArray
 
 
+@dataclass(eq=False)
 class RLController(AccelerationController):
     """Placeholder for vehicles the RL agent drives (``is_rl = True``).
 
@@ -25,13 +32,14 @@ class RLController(AccelerationController):
     aliases = ("RL",)
     is_rl = True
 
-    def __init__(self, veh_id: str | None = None, car_following_params: Any = None) -> None:
-        super().__init__(veh_id=veh_id, car_following_params=car_following_params)
+    veh_id: str | None = declared(VEH_ID)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         return np.full(inputs.size, np.nan)
 
 
+@dataclass(eq=False)
 class SimCarFollowingController(AccelerationController):
     """Leave the vehicle to SUMO's own car-following model (``commands_sumo = False``).
 
@@ -43,8 +51,8 @@ class SimCarFollowingController(AccelerationController):
     aliases = ("SimCarFollowing", "SUMO")
     commands_sumo = False
 
-    def __init__(self, veh_id: str | None = None, car_following_params: Any = None) -> None:
-        super().__init__(veh_id=veh_id, car_following_params=car_following_params)
+    veh_id: str | None = declared(VEH_ID)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         return np.full(inputs.size, np.nan)

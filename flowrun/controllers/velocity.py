@@ -7,14 +7,34 @@ it in one step, ``(v_cmd - v)/dt`` (m/s^2).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from flowrun.controllers._checks import number
-from flowrun.controllers.base import AccelerationController
+from flowrun.controllers.base import (
+    CAR_FOLLOWING_PARAMS,
+    DISPLAY_WARNINGS,
+    FAIL_SAFE,
+    NOISE,
+    VEH_ID,
+    AccelerationController,
+    FailSafe,
+)
+from flowrun.controllers.params import declared, number, option, param
 from flowrun.types import CarFollowingInputs, FloatArray
+
+
+def _edges(owner: str, name: str, value: Any) -> frozenset[str]:
+    return frozenset(value or ())
+
+
+def _interval(owner: str, name: str, value: Any) -> tuple[float, float] | None:
+    if value is None:
+        return None
+    lo, hi = (number(owner, name, x) for x in value)
+    return lo, hi
 
 
 def follower_stopper_speed(
@@ -59,62 +79,36 @@ def follower_stopper_speed(
     )
 
 
+@dataclass(eq=False)
 class FollowerStopper(AccelerationController):
     """Stern et al.'s FollowerStopper (see :func:`follower_stopper_speed`).
 
-    Args:
-        veh_id: Flow's vehicle id (Flow passes it first).
-        car_following_params: the vehicle type's ``SumoCarFollowingParams`` (its
-            ``accel``/``decel`` cap the command when the kernel gives no limits).
-        v_des: desired speed, m/s.
-        danger_edges: edges near which Flow hands the car back to SUMO (kept for the
-            kernel; the formula itself does not know edges).
-        control_length: ``(x_start, x_end)`` in m outside which Flow hands the car to SUMO
-            (kept for the kernel, as ``danger_edges``).
-        dx_1_0, dx_2_0, dx_3_0: base switching gaps, m. d_1, d_2, d_3: decelerations, m/s^2.
-        noise: acceleration noise, as for every controller.
-        fail_safe: Flow's FollowerStopper always runs ``safe_velocity``; so does the default.
-
-    The command is clipped to ``[-max_decel, max_accel]``, the vehicle type's limits (Flow
-    clips to the vehicle type's accel/decel), when they are known.
+    ``danger_edges`` and ``control_length`` say where Flow hands the car back to SUMO (read
+    by :class:`~flowrun.controllers.view.VehicleControllerView`; the formula knows no
+    edges). Flow's FollowerStopper always runs the ``safe_velocity`` fail-safe; so does the
+    default here. The command is clipped to ``[-max_decel, max_accel]``, the vehicle type's
+    limits (as Flow clips it), when they are known.
     """
 
     registered_name = "FollowerStopper"
 
-    def __init__(
-        self,
-        veh_id: str | None = None,
-        car_following_params: Any = None,
-        v_des: float = 15,
-        danger_edges: Sequence[str] | None = None,
-        control_length: Sequence[float] | None = None,
-        dx_1_0: float = 4.5,
-        dx_2_0: float = 5.25,
-        dx_3_0: float = 6.0,
-        d_1: float = 1.5,
-        d_2: float = 1.0,
-        d_3: float = 0.5,
-        noise: float = 0,
-        fail_safe: str | Sequence[str] | None = "safe_velocity",
-        display_warnings: bool = True,
-    ) -> None:
-        super().__init__(
-            noise=noise, fail_safe=fail_safe, veh_id=veh_id,
-            car_following_params=car_following_params, display_warnings=display_warnings,
-        )  # fmt: skip
-        me = type(self).__name__
-        self.v_des = number(me, "v_des", v_des, low=0)
-        self.dx_1_0 = number(me, "dx_1_0", dx_1_0, low=0)
-        self.dx_2_0 = number(me, "dx_2_0", dx_2_0, low=self.dx_1_0, strict=True)
-        self.dx_3_0 = number(me, "dx_3_0", dx_3_0, low=self.dx_2_0, strict=True)
-        self.d_1 = number(me, "d_1", d_1, low=0, strict=True)
-        self.d_2 = number(me, "d_2", d_2, low=0, strict=True)
-        self.d_3 = number(me, "d_3", d_3, low=0, strict=True)
-        self.danger_edges: frozenset[str] = frozenset(danger_edges or ())
-        self.control_length: tuple[float, float] | None = None
-        if control_length is not None:
-            lo, hi = (number(me, "control_length", x) for x in control_length)
-            self.control_length = (lo, hi)
+    veh_id: str | None = declared(VEH_ID)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
+    v_des: float = param(15, "m/s", "desired speed", low=0)
+    danger_edges: Collection[str] | None = option(None, "edges near whose end SUMO drives", _edges)
+    control_length: Sequence[float] | None = option(
+        None, "(x_start, x_end) outside which SUMO drives", _interval, unit="m"
+    )
+    dx_1_0: float = param(4.5, "m", "gap below which the command is 0", low=0)
+    dx_2_0: float = param(5.25, "m", "gap of the first ramp's end", low="dx_1_0", strict=True)
+    dx_3_0: float = param(6.0, "m", "gap above which the command is v_des", low="dx_2_0",
+                          strict=True)  # fmt: skip
+    d_1: float = param(1.5, "m/s^2", "deceleration widening dx_1", low=0, strict=True)
+    d_2: float = param(1.0, "m/s^2", "deceleration widening dx_2", low=0, strict=True)
+    d_3: float = param(0.5, "m/s^2", "deceleration widening dx_3", low=0, strict=True)
+    noise: float = declared(NOISE)
+    fail_safe: FailSafe = declared(FAIL_SAFE, default="safe_velocity")
+    display_warnings: bool = declared(DISPLAY_WARNINGS)
 
     def _accel(self, inputs: CarFollowingInputs) -> FloatArray:
         v_cmd = follower_stopper_speed(
@@ -157,6 +151,7 @@ def pi_saturation_speed(
     return beta * (alpha * v_target + (1.0 - alpha) * v_lead) + (1.0 - beta) * v_cmd_prev
 
 
+@dataclass(eq=False)
 class PISaturation(AccelerationController):
     """Stern et al.'s proportional-integral controller with saturation (stateful).
 
@@ -169,42 +164,25 @@ class PISaturation(AccelerationController):
 
     The acceleration is capped at the vehicle type's ``accel`` (``inputs.max_accel``, or the
     ``car_following_params`` given) as in Flow, which does not cap the deceleration.
-
-    Args:
-        veh_id: Flow's vehicle id (Flow passes it first).
-        car_following_params: the vehicle type's ``SumoCarFollowingParams``.
-        v_catch: catch-up speed added to ``U`` at large gaps, m/s.
-        g_l, g_u: gaps (m) between which the catch-up speed ramps in.
-        gamma: gap width (m) over which the controller blends from the leader's speed.
-        history_time: length of the speed history, s.
     """
 
     registered_name = "PISaturation"
     stateful = True
 
-    def __init__(
-        self,
-        veh_id: str | None = None,
-        car_following_params: Any = None,
-        v_catch: float = 1,
-        g_l: float = 7,
-        g_u: float = 30,
-        gamma: float = 2,
-        history_time: float = 38,
-        noise: float = 0,
-        fail_safe: str | Sequence[str] | None = None,
-        display_warnings: bool = True,
-    ) -> None:
-        super().__init__(
-            noise=noise, fail_safe=fail_safe, veh_id=veh_id,
-            car_following_params=car_following_params, display_warnings=display_warnings,
-        )  # fmt: skip
-        me = type(self).__name__
-        self.v_catch = number(me, "v_catch", v_catch, low=0)
-        self.g_l = number(me, "g_l", g_l, low=0)
-        self.g_u = number(me, "g_u", g_u, low=self.g_l, strict=True)
-        self.gamma = number(me, "gamma", gamma, low=0, strict=True)
-        self.history_time = number(me, "history_time", history_time, low=0, strict=True)
+    veh_id: str | None = declared(VEH_ID)
+    car_following_params: Any = declared(CAR_FOLLOWING_PARAMS)
+    v_catch: float = param(1, "m/s", "catch-up speed added at large gaps", low=0)
+    g_l: float = param(7, "m", "gap where the catch-up speed starts", low=0)
+    g_u: float = param(30, "m", "gap where it is complete", low="g_l", strict=True)
+    gamma: float = param(2, "m", "gap width of the blend from the leader's speed", low=0,
+                         strict=True)  # fmt: skip
+    history_time: float = param(38, "s", "length of the speed history", low=0, strict=True)
+    noise: float = declared(NOISE)
+    fail_safe: FailSafe = declared(FAIL_SAFE)
+    display_warnings: bool = declared(DISPLAY_WARNINGS)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
         self.reset(0)
 
     def reset(self, num_vehicles: int) -> None:

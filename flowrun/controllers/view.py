@@ -266,11 +266,11 @@ def flow_action(controller: Any, env: Any) -> float | None:
     if controller.noise > 0:
         dt = float(getattr(env, "sim_step", None) or env.sim_params.sim_step)
         value += math.sqrt(dt) * float(controller_rng(env).normal(0.0, controller.noise))
-    if controller.fail_safe:
+    if controller.fail_safes:
         inputs = read_inputs(env, veh_id, controller.max_accel, controller.max_deaccel)
         value = float(
             apply_fail_safes(
-                controller.fail_safe, np.array([value]), inputs, controller.time_delay
+                controller.fail_safes, np.array([value]), inputs, controller.time_delay
             )[0]
         )
     return value
