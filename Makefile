@@ -12,15 +12,16 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 
+# pip shows its progress on the long steps (a full install takes several minutes).
 $(CORE_STAMP): $(BIN)/python pyproject.toml
-	$(BIN)/pip install --quiet -e .
+	$(BIN)/pip install -e .
 	touch $(CORE_STAMP)
 
 # torch is pinned first so no extra (train, rllib) ever pulls a multi-GB CUDA build.
 # The rllib extra pins gymnasium==1.2.2 (Ray RLlib's exact pin), so the tests run on that.
 $(FULL_STAMP): $(BIN)/python pyproject.toml
-	$(BIN)/pip install --quiet torch==2.13.0
-	$(BIN)/pip install --quiet -e '.[train,dev,multiagent,rllib]'
+	$(BIN)/pip install torch==2.13.0
+	$(BIN)/pip install -e '.[train,dev,multiagent,rllib]'
 	touch $(CORE_STAMP) $(FULL_STAMP)
 
 install: $(FULL_STAMP)
@@ -31,10 +32,11 @@ run: $(CORE_STAMP)
 test: $(FULL_STAMP)
 	$(BIN)/ruff check flowrun tests bench examples
 	$(BIN)/mypy
-	$(BIN)/python -m pytest -q
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
+	$(BIN)/python -m pytest -q --durations=15
 
 bench: $(FULL_STAMP)
 	$(BIN)/python bench/ring.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache site
