@@ -18,7 +18,7 @@ from flowrun.networks.base import Network, NetworkSpec
 from flowrun.networks.build import build_network, connections_xml, nodes_xml
 from flowrun.networks.registry import network_class, network_table, validate_network
 from flowrun.networks.ring import RingNetwork
-from flowrun.networks.template import convert_osm
+from flowrun.networks.template_read import convert_osm
 
 
 def make(cls: type[Network], template: str | dict[str, str] | None = None,

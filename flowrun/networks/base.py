@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -20,149 +19,33 @@ from flowrun.config.params import (
     VehicleParams,
 )
 from flowrun.errors import ConfigError
+from flowrun.networks.checks import check_values
 from flowrun.networks.flow_attributes import FlowAttributes
+from flowrun.networks.flow_hooks import lights_on_nodes, spec_from_hooks
+from flowrun.networks.placement import place_on_network, vehicle_space
+from flowrun.networks.spec import (
+    Connection,
+    Edge,
+    NetworkSpec,
+    Node,
+    RouteChoice,
+    StartPositions,
+    TemplateVehicle,
+)
+from flowrun.networks.template_demand import apply_template
+from flowrun.networks.template_read import template_spec
 from flowrun.suggest import did_you_mean
 
-
-@dataclass(frozen=True)
-class Node:
-    """A junction: id and coordinates in metres."""
-
-    id: str
-    x: float
-    y: float
-    type: str = "priority"
-    radius: float | None = None
-
-
-@dataclass(frozen=True)
-class Edge:
-    """A road from one node to another.
-
-    Attributes:
-        id: edge id.
-        from_node: start node id.
-        to_node: end node id.
-        length: length in metres (forced, so positions add up exactly).
-        lanes: number of lanes.
-        speed: speed limit, m/s.
-        shape: polyline (x, y) points, metres.
-        priority: SUMO edge priority (decides right of way at priority junctions).
-        spread_type: SUMO ``spreadType``: ``right`` (lanes to the right of the edge's line,
-            netconvert's default) or ``center`` / ``roadCenter`` (lanes centred on it).
-    """
-
-    id: str
-    from_node: str
-    to_node: str
-    length: float
-    lanes: int
-    speed: float
-    shape: tuple[tuple[float, float], ...] = ()
-    priority: int = 78
-    spread_type: str = "right"
-
-
-@dataclass(frozen=True)
-class Connection:
-    """A lane-to-lane connection through a junction (Flow's ``specify_connections`` entries)."""
-
-    from_edge: str
-    to_edge: str
-    from_lane: int
-    to_lane: int
-
-
-#: One route choice: the edges driven and the probability of taking it.
-RouteChoice = tuple[tuple[str, ...], float]
-
-
-@dataclass(frozen=True)
-class TemplateVehicle:
-    """A vehicle of a template's route file, added at every reset (Flow's template vehicles).
-
-    Attributes:
-        id: vehicle id.
-        type: vehicle type id.
-        route: the edges it drives.
-        depart: departure time as written, s (it departs that long after the reset).
-        depart_pos: SUMO ``departPos`` (text, e.g. ``"12.5"`` or ``"base"``).
-        depart_speed: SUMO ``departSpeed`` (text, e.g. ``"0"`` or ``"max"``).
-    """
-
-    id: str
-    type: str
-    route: tuple[str, ...]
-    depart: float
-    depart_pos: str = "base"
-    depart_speed: str = "0"
-
-
-@dataclass(frozen=True)
-class NetworkSpec:
-    """Everything SUMO needs to build the road, plus flowrun's own coordinates.
-
-    Attributes:
-        nodes: junctions.
-        edges: roads, in driving order for closed networks.
-        routes: start edge -> the edges of its (most likely) route; vehicles starting on edge
-            ``e`` use route ``e``.
-        edge_starts: edge id -> position of the edge's start along the network, metres.
-            Junction-internal edges (ids starting with ``:``) may be listed; the kernel places
-            the ones that are not right after the edge that leads into them.
-        length: total length of the network along its edges, metres.
-        closed: ``True`` for a ring (positions wrap at ``length``).
-        extra: network-specific facts (e.g. the ring's radius).
-        connections: lane-to-lane connections; empty lets netconvert decide.
-        route_choices: start edge -> ``((edges, probability), ...)`` when a start edge has
-            several routes (Flow's ``[(route, prob)]`` form); empty otherwise.
-        internal_links: build junction-internal lanes (all networks but the ring, whose
-            positions must add up exactly around the loop).
-        main_route: the edges of the network's main road, in driving order (time-space
-            diagrams follow it); empty means the edges in their listed order.
-        net_file: an existing ``.net.xml`` to use as is (``NetParams(template=...)``) instead
-            of building one from nodes and edges.
-        extra_files: further SUMO route files of a template.
-        departures: vehicles added at every reset with a departure time (a template's).
-    """
-
-    nodes: tuple[Node, ...]
-    edges: tuple[Edge, ...]
-    routes: dict[str, tuple[str, ...]]
-    edge_starts: dict[str, float]
-    length: float
-    closed: bool = False
-    extra: dict[str, Any] = field(default_factory=dict)
-    connections: tuple[Connection, ...] = ()
-    route_choices: dict[str, tuple[RouteChoice, ...]] = field(default_factory=dict)
-    internal_links: bool = False
-    main_route: tuple[str, ...] = ()
-    net_file: str | None = None
-    extra_files: tuple[str, ...] = ()
-    departures: tuple[TemplateVehicle, ...] = ()
-
-    def choices(self, start_edge: str) -> tuple[RouteChoice, ...]:
-        """The route choices of vehicles starting on ``start_edge`` (one sure route if fixed)."""
-        if start_edge in self.route_choices:
-            return self.route_choices[start_edge]
-        if start_edge in self.routes:
-            return ((self.routes[start_edge], 1.0),)
-        return ()
-
-
-@dataclass(frozen=True)
-class StartPositions:
-    """Where each vehicle enters: parallel lists in ``VehicleParams.ids`` order.
-
-    Attributes:
-        edges: edge id of each vehicle.
-        lane_pos: position on that edge, metres (front bumper).
-        lanes: lane index.
-    """
-
-    edges: list[str]
-    lane_pos: list[float]
-    lanes: list[int]
+__all__ = [  # the road's data types are defined in spec.py and importable from here too
+    "Connection",
+    "Edge",
+    "Network",
+    "NetworkSpec",
+    "Node",
+    "RouteChoice",
+    "StartPositions",
+    "TemplateVehicle",
+]
 
 
 class Network(FlowAttributes):
@@ -203,12 +86,8 @@ class Network(FlowAttributes):
         self.params = self.resolve_params(net_params.additional_params)
         self.spec = self.build_spec()
         if lights := self.traffic_lights.get_properties():  # Flow: the node becomes a light
-            from flowrun.networks.flow_hooks import lights_on_nodes
-
             self.spec = lights_on_nodes(self.spec, lights)
         if isinstance(net_params.template, Mapping):  # Flow's {net, rou, vtype}
-            from flowrun.networks.template_demand import apply_template
-
             self.vehicles, self.spec = apply_template(net_params.template, vehicles, self.spec)
 
     @classmethod
@@ -228,8 +107,6 @@ class Network(FlowAttributes):
                 )
             params[key] = value
         if cls.PARAM_KINDS:
-            from flowrun.networks.checks import check_values
-
             check_values(params, cls.PARAM_KINDS)
         return params
 
@@ -261,24 +138,18 @@ class Network(FlowAttributes):
         if type(self).specify_edges is Network.specify_edges and (
             np_.template is not None or np_.osm_path is not None
         ):  # Flow's way of using a template: only specify_routes is written
-            from flowrun.networks.template import TemplateNetwork
-
-            return TemplateNetwork.build_spec(self)  # type: ignore[arg-type]
+            return template_spec(np_, self.specify_routes(np_))
         if type(self).specify_edges is Network.specify_edges:
             raise ConfigError(
                 f"network class {type(self).__name__} describes no road: implement Flow's "
                 "specify_nodes / specify_edges / specify_routes (and optionally "
                 "specify_types, specify_connections, specify_edge_starts)"
             )
-        from flowrun.networks.flow_hooks import spec_from_hooks
-
         return spec_from_hooks(self)
 
     def start_positions(self, rng: np.random.Generator) -> StartPositions:
         """Initial position of every vehicle: Flow's ``InitialConfig`` placement over the
         network's edges (subclasses may override)."""
-        from flowrun.networks.placement import place_on_network, vehicle_space
-
         if self.initial_config.spacing == "custom":
             return self.custom_start_positions()
         return place_on_network(self.spec, vehicle_space(self.vehicles), self.initial_config, rng)

@@ -19,7 +19,8 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from flowrun.networks.base import Connection, Edge, Network, NetworkSpec, Node
+from flowrun.networks.base import Network
+from flowrun.networks.spec import Connection, Edge, NetworkSpec, Node
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # factor multiplying the number of lanes (4s -> 2s -> 1s)

@@ -15,7 +15,7 @@ from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 from flowrun.errors import ConfigError, SimulationError
-from flowrun.networks.base import NetworkSpec
+from flowrun.networks.spec import NetworkSpec
 
 
 def sumo_binary(name: str) -> str:

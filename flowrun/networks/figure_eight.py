@@ -18,8 +18,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from flowrun.errors import ConfigError
-from flowrun.networks.base import Connection, Edge, Network, NetworkSpec, Node
+from flowrun.networks.base import Network
 from flowrun.networks.checks import check_values
+from flowrun.networks.spec import Connection, Edge, NetworkSpec, Node
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # radius of the circular parts, m (also half the length of each straight road)

@@ -7,6 +7,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from flowrun.networks.template_read import rou_routes
+
 
 class _view:  # lower case: used as a decorator, like ``property``
     """A read-only computed attribute that an instance may still assign (a user's Flow
@@ -72,11 +74,9 @@ class FlowAttributes:
     def routes(self) -> dict[str, Any]:
         """Flow's ``routes`` as its kernel leaves them: ``{start edge: [(edges, prob)]}``;
         with a template dict's ``rou`` file, that file's ``{route or vehicle id: [edges]}``,
-        as Flow's network reads them (:func:`~flowrun.networks.template.rou_routes`)."""
+        as Flow's network reads them (:func:`~flowrun.networks.template_read.rou_routes`)."""
         template = getattr(getattr(self, "net_params", None), "template", None)
         if isinstance(template, Mapping) and template.get("rou"):
-            from flowrun.networks.template import rou_routes
-
             return rou_routes(template["rou"])
         starts = dict.fromkeys((*self.spec.routes, *self.spec.route_choices))
         return {e: [(list(r), float(p)) for r, p in self.spec.choices(e)] for e in starts}

@@ -17,8 +17,8 @@ from dataclasses import replace
 from typing import Any
 
 from flowrun.errors import ConfigError
-from flowrun.networks.base import Connection, Edge, NetworkSpec, Node
-from flowrun.networks.template import parse_routes
+from flowrun.networks.route_forms import parse_routes
+from flowrun.networks.spec import Connection, Edge, NetworkSpec, Node
 from flowrun.suggest import did_you_mean
 
 #: SUMO's edge ``spreadType`` values (where an edge's lanes lie relative to its line)

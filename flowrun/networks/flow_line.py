@@ -11,8 +11,8 @@ import math
 import numpy as np
 
 from flowrun.config.params import InitialConfig
-from flowrun.networks.base import NetworkSpec, StartPositions
-from flowrun.networks.placement import _no_room, lanes_spread
+from flowrun.networks.placement_rules import lanes_spread, no_room
+from flowrun.networks.spec import NetworkSpec, StartPositions
 
 
 def flow_loop_line(spec: NetworkSpec) -> list[tuple[float, str]] | None:
@@ -73,7 +73,7 @@ def place_on_flow_line(
     step = (total - bunching) / math.ceil(n / k)
     unit = max(vehicle_space) + max(0.0, initial.min_gap)
     if n > k and step < unit:
-        raise _no_room(n, unit, total - bunching, bunching)
+        raise no_room(n, unit, total - bunching, bunching)
     starts = [x for x, _ in line]
     cursor = [float(initial.x0) % total] * k
     edges: list[str] = []

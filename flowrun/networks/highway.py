@@ -13,7 +13,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from flowrun.errors import ConfigError
-from flowrun.networks.base import Edge, Network, NetworkSpec, Node
+from flowrun.networks.base import Network
+from flowrun.networks.spec import Edge, NetworkSpec, Node
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # length of the highway (without the ghost edge), m

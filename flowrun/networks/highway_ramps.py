@@ -26,8 +26,9 @@ import math
 from typing import Any, ClassVar
 
 from flowrun.errors import ConfigError
-from flowrun.networks.base import Edge, Network, NetworkSpec, Node, RouteChoice
+from flowrun.networks.base import Network
 from flowrun.networks.checks import check_values
+from flowrun.networks.spec import Edge, NetworkSpec, Node, RouteChoice
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # lengths of the highway, of each on-ramp and of each off-ramp, m

@@ -16,7 +16,7 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
-from flowrun.networks.base import NetworkSpec
+from flowrun.networks.spec import NetworkSpec
 from flowrun.networks.template import TemplateNetwork
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {

@@ -12,7 +12,8 @@ from __future__ import annotations
 import math
 from typing import Any, ClassVar
 
-from flowrun.networks.base import Edge, Network, NetworkSpec, Node
+from flowrun.networks.base import Network
+from flowrun.networks.spec import Edge, NetworkSpec, Node
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     # length of the ramp edge `bottom` that joins the highway, m

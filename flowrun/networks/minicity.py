@@ -17,7 +17,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from flowrun.errors import ConfigError
-from flowrun.networks.base import Connection, Edge, Network, NetworkSpec, Node
+from flowrun.networks.base import Network
 from flowrun.networks.minicity_data import (
     ARCS,
     CONNECTIONS,
@@ -28,6 +28,7 @@ from flowrun.networks.minicity_data import (
     SCALING,
     SPEED,
 )
+from flowrun.networks.spec import Connection, Edge, NetworkSpec, Node
 
 #: Flow's MiniCity takes no parameters.
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {}

@@ -13,22 +13,12 @@ import numpy as np
 
 from flowrun.config.params import InitialConfig, VehicleParams
 from flowrun.errors import ConfigError, CountMismatchError
-from flowrun.networks.base import NetworkSpec, StartPositions
+from flowrun.networks.flow_line import flow_loop_line, place_on_flow_line
+from flowrun.networks.placement_rules import lanes_spread, no_room
+from flowrun.networks.spec import NetworkSpec, StartPositions
 from flowrun.suggest import did_you_mean
 
 log = logging.getLogger(__name__)
-
-
-def lanes_spread(lanes_distribution: float) -> float:
-    """``lanes_distribution`` with values below 1 counted as 1, as Flow does (with a warning).
-
-    Args:
-        lanes_distribution: ``InitialConfig.lanes_distribution`` (``inf`` = all lanes).
-    """
-    if lanes_distribution < 1:
-        log.warning('"lanes_distribution" is too small (%s); setting to 1', lanes_distribution)
-        return 1.0
-    return float(lanes_distribution)
 
 
 def place_on_closed_road(
@@ -147,7 +137,6 @@ def place_on_network(
     by_id = {e.id: e for e in spec.edges}
     distribution = initial.edges_distribution
     if distribution == "all" and initial.spacing == "uniform":
-        from flowrun.networks.flow_line import flow_loop_line, place_on_flow_line
 
         line = flow_loop_line(spec)
         if line is not None:
@@ -266,22 +255,13 @@ def place_on_edges(
     )
 
 
-def _no_room(n: int, unit: float, room: float, bunching: float) -> ConfigError:
-    return ConfigError(
-        f"{n} vehicles need {unit:.1f} m each (length + minGap + min_gap) but the edges offer "
-        f"{room:.1f} m per lane after bunching {bunching} m; use fewer vehicles, more edges "
-        "(edges_distribution), more lanes or less bunching",
-        path="edges_distribution",
-    )
-
-
 def _uniform_slots(
     room: np.ndarray, lanes: np.ndarray, n: int, unit: float, bunching: float, x0: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     total = float(room.sum())
     span = total - bunching
     if room.size == 0 or span <= 0:
-        raise _no_room(n, unit, max(total, 0.0), bunching)
+        raise no_room(n, unit, max(total, 0.0), bunching)
     starts = np.concatenate(([0.0], np.cumsum(room)[:-1]))
     rows = math.ceil(n / int(lanes.max()))
     while True:
@@ -292,7 +272,7 @@ def _uniform_slots(
             break
         rows += 1
     if rows > 1 and step < unit:
-        raise _no_room(n, unit, span, bunching)
+        raise no_room(n, unit, span, bunching)
     per_row = lanes[idx]
     row_of = np.repeat(np.arange(rows), per_row)[:n]
     lane = (np.arange(n) - np.repeat(np.cumsum(per_row) - per_row, per_row)[:n]).astype(np.int64)
@@ -315,7 +295,7 @@ def _random_slots(
     total = float(seg_room.sum())
     free = total - (n - 1) * unit - bunching * (int(lanes.max()) if room.size else 1)
     if room.size == 0 or free <= 0:
-        raise _no_room(n, unit, max(total, 0.0), bunching)
+        raise no_room(n, unit, max(total, 0.0), bunching)
     y = np.sort(rng.uniform(0.0, free, size=n)) + np.arange(n) * unit
     seg_start = np.concatenate(([0.0], np.cumsum(seg_room)[:-1]))
     seg = np.clip(np.searchsorted(seg_start, y, side="right") - 1, 0, seg_room.size - 1)

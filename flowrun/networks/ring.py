@@ -15,8 +15,10 @@ import numpy as np
 
 from flowrun.config.params import InitialConfig, VehicleParams
 from flowrun.errors import ConfigError
-from flowrun.networks.base import Edge, Network, NetworkSpec, Node, StartPositions
+from flowrun.networks.base import Network
+from flowrun.networks.flow_hooks import overlay_hooks
 from flowrun.networks.placement import SPACINGS, place_on_closed_road
+from flowrun.networks.spec import Edge, NetworkSpec, Node, StartPositions
 from flowrun.suggest import did_you_mean
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
@@ -111,8 +113,6 @@ class RingNetwork(Network):
     def build_spec(self) -> NetworkSpec:
         """The ring's nodes, edges and routes (a subclass's own ``specify_edges`` /
         ``specify_routes`` replace the ring's, as in Flow)."""
-        from flowrun.networks.flow_hooks import overlay_hooks
-
         p = self.params
         spec = ring_spec(
             float(p["length"]), int(p["lanes"]), float(p["speed_limit"]), int(p["resolution"])

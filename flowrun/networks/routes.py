@@ -7,7 +7,7 @@ from xml.sax.saxutils import quoteattr
 
 from flowrun.config.params import VehicleParams
 from flowrun.config.vtype import vtype_attributes
-from flowrun.networks.base import NetworkSpec
+from flowrun.networks.spec import NetworkSpec
 
 
 def routes_xml(spec: NetworkSpec, vehicles: VehicleParams, net_inflows: Any = None) -> str:

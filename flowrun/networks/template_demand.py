@@ -38,8 +38,8 @@ from typing import Any
 from flowrun.config.params import VehicleParams
 from flowrun.config.vtype import SumoCarFollowingParams, SumoLaneChangeParams
 from flowrun.errors import ConfigError
-from flowrun.networks.base import NetworkSpec, TemplateVehicle
-from flowrun.networks.template import file_names, read_xml
+from flowrun.networks.spec import NetworkSpec, TemplateVehicle
+from flowrun.networks.template_read import file_names, read_xml
 from flowrun.suggest import did_you_mean
 
 #: vType attribute -> ``SumoCarFollowingParams`` field: what Flow reads from every vType

@@ -13,15 +13,13 @@ import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
 from xml.sax.saxutils import quoteattr
 
 from flowrun.config.traffic_lights import Phase, TlsProgram, TrafficLightParams
 from flowrun.errors import ConfigError
+from flowrun.networks.base import Network
+from flowrun.networks.build import build_network
 from flowrun.networks.tls_detectors import check_detector_room
-
-if TYPE_CHECKING:
-    from flowrun.networks.base import Network
 
 
 @dataclass(frozen=True)
@@ -136,8 +134,6 @@ def check_programs(network: Network, params: TrafficLightParams) -> None:
             for its detectors (:mod:`flowrun.networks.tls_detectors`).
         SimulationError: netconvert failed.
     """
-    from flowrun.networks.build import build_network
-
     with tempfile.TemporaryDirectory(prefix="flowrun-tls-") as tmp:
         net_file = build_network(network.spec, Path(tmp), name=network.network_type or "network")
         check_detector_room(resolve_programs(params, read_net_lights(net_file)), net_file)

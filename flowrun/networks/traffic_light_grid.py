@@ -19,8 +19,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from flowrun.errors import ConfigError
-from flowrun.networks.base import Connection, Edge, Network, NetworkSpec, Node, StartPositions
+from flowrun.networks.base import Network
 from flowrun.networks.checks import check_values
+from flowrun.networks.spec import Connection, Edge, NetworkSpec, Node, StartPositions
 
 ADDITIONAL_NET_PARAMS: dict[str, Any] = {
     "grid_array": {
