@@ -38,6 +38,7 @@ from flowrun.replay import (
     summary_rows,
     to_csv,
 )
+from flowrun.replay.html import write_html
 from flowrun.replay.signals import signal_series
 
 T = TypeVar("T")
@@ -125,7 +126,7 @@ def _interruptible(work: Callable[[], T], cleaned: str) -> T:
 REPLAY_HELP = f"""Summarise a run's MCAP log (or compare two); plot it, export CSV, repair it.
 
 Nothing is overwritten: --plot writes into a new folder each time (see --out), and --csv,
---foxglove and --repair refuse a file that exists.
+--foxglove, --html and --repair refuse a file that exists.
 
 replay reads a log and {NO_SEED_OR_SET}: the log holds its seed and config.
 """
@@ -193,6 +194,14 @@ def register(app: typer.Typer) -> None:
                 help="Write the selected steps/vehicles to exactly this new MCAP file.",
             ),
         ] = None,
+        html: Annotated[
+            Path | None,
+            typer.Option(
+                "--html",
+                help="Write a self-contained player page of the run (any browser, no server) "
+                "to exactly this new file.",
+            ),
+        ] = None,
     ) -> None:
         """Summarise, compare, plot, export or repair MCAP logs (help: REPLAY_HELP)."""
         console = Console()
@@ -204,12 +213,13 @@ def register(app: typer.Typer) -> None:
                 if not 1 <= len(logs) <= 2:
                     raise RecordingError(f"replay takes one log or two to compare, got {len(logs)}")
                 _check_times(start, end)
-                if len(logs) == 2 and (csv is not None or foxglove is not None):
+                if len(logs) == 2 and (csv, foxglove, html) != (None, None, None):
                     raise RecordingError(
-                        "--csv and --foxglove work on one log; drop the second log"
+                        "--csv, --foxglove and --html work on one log; drop the second log"
                     )
                 _check_new(csv, "--csv")
                 _check_new(foxglove, "--foxglove")
+                _check_new(html, "--html")
                 if plot is not None and out is not None and out.exists() and not out.is_dir():
                     raise RecordingError(f"--out {out} is a file; give a folder for the plots")
                 if plot is None and out is not None:
@@ -296,6 +306,13 @@ def register(app: typer.Typer) -> None:
                         f"nothing was written to {foxglove}",
                     )
                     typer.echo(f"wrote {foxglove} ({n} logged steps)")
+                if html is not None:
+                    page = _interruptible(
+                        lambda: write_html(opened[0], html), f"nothing was written to {html}"
+                    )
+                    typer.echo(f"wrote {html} ({page.bytes / 1e6:.1f} MB, {page.frames} steps)")
+                    for note in page.notes:
+                        typer.secho(f"note: {note}", err=True, fg=typer.colors.YELLOW)
                 if plot is not None:
                     if plot is PlotKind.signals and not opened[0].has_signals:
                         signal_series(opened[0])  # raises the readable "no traffic lights" error
