@@ -136,7 +136,7 @@ def test_flow_ids_follow_flow() -> None:
 
 def test_sumo_field_names_in_extra_are_refused() -> None:
     with pytest.raises(ConfigError) as info:
-        one(vehs_per_hour=1, route="r0")
+        one(vehs_per_hour=1, type="r0")
     assert info.value.path == "extra"
 
 

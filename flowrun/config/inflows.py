@@ -62,6 +62,10 @@ class InFlow:
             first).
         end: last departure time, s. Ignored when ``number`` is set.
         number: total vehicles of this flow; replaces ``end`` (SUMO ``number``).
+        route: one route of the network by name, which every vehicle of this flow drives
+            (Flow's ``InFlows.add(..., route="routehighway_0_0")``: Flow names the routes
+            ``route{start edge}_{choice}``); it must start on ``edge``. ``None`` spreads the
+            flow over the edge's route choices by their probabilities.
         extra: further SUMO ``<flow>`` attributes passed as they are (``color``,
             ``departPos``, ``arrivalPos``, ...), SUMO's own spelling; values written with
             ``str``.
@@ -78,6 +82,7 @@ class InFlow:
     begin: float = 1.0
     end: float = 86400.0
     number: int | None = None
+    route: str | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -131,11 +136,12 @@ def inflow_problem(flow: InFlow) -> tuple[str, str] | None:
         ("edge", bool(flow.edge), "must not be empty"),
         ("veh_type", bool(flow.veh_type), "must not be empty"),
         ("name", bool(flow.name), "must not be empty"),
+        ("route", flow.route is None or bool(flow.route), "must name a route"),
     ]
     for name, ok, message in checks:
         if not ok:
             return name, f"{message}, got {getattr(flow, name)!r}"
-    clash = sorted(set(flow.extra) & {"id", "type", "route", *SUMO_NAMES.values()})
+    clash = sorted(set(flow.extra) & {"id", "type", "route", "from", *SUMO_NAMES.values()})
     if clash:
         return "extra", f"{', '.join(clash)} must be given as InFlow fields, not in extra"
     return None
@@ -172,7 +178,8 @@ class InFlows:
         (s). ``number`` caps the vehicles and replaces ``end``. Other keywords are SUMO
         ``<flow>`` attributes (``color``, ``departPos``, ...) and are passed on as given;
         Flow's old ``vehsPerHour``, ``departLane`` and ``departSpeed`` still work (with a
-        ``DeprecationWarning``). See :class:`InFlow` for every field.
+        ``DeprecationWarning``). ``route`` (a SUMO attribute Flow passes on) picks one of the
+        network's routes by name (:attr:`InFlow.route`). See :class:`InFlow` for every field.
 
         Raises:
             ConfigError: no rate or more than one, ``begin < 1``, or another bad value.
@@ -200,6 +207,7 @@ class InFlows:
                 begin=float(begin),
                 end=float(end),
                 number=number,
+                route=kwargs.pop("route", None),
                 extra=dict(kwargs),
                 **values,
             )

@@ -154,6 +154,7 @@ def _build(data: dict[str, Any], loc: Locations) -> ExperimentConfig:
     edges = None if network is None else [edge.id for edge in network.spec.edges]
     _check_inflows(cfg, edges, loc, None if network is None else network.vehicles.type_names)
     if network is not None:
+        _check_inflow_routes(cfg, network, loc)
         _check_traffic_lights(cfg, network, loc)
     check_experiment(cfg, network, loc)
     for path, why in ignored_settings(cfg):
@@ -252,6 +253,21 @@ def _check_inflows(
                 f"{did_you_mean(flow.edge, edges)}; its edges are: {', '.join(edges)}",
                 ("network", "inflows", j, "edge"),
             )
+
+
+def _check_inflow_routes(cfg: ExperimentConfig, network: Any, loc: Locations) -> None:
+    """An inflow's ``route`` names one of the network's routes, starting on its edge."""
+    check = optional("flowrun.networks.routes", "check_inflow_route")
+    inflows = cfg.network.net_params.inflows
+    if check is None or inflows is None:
+        return
+    for j, flow in enumerate(inflows.get()):
+        if flow.route is None:
+            continue
+        try:
+            check(network.spec, flow.route, flow.edge)
+        except ConfigError as err:
+            raise loc.error(err.message, ("network", "inflows", j, "route")) from None
 
 
 def _build_network(cfg: ExperimentConfig, loc: Locations) -> Any:

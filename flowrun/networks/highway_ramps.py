@@ -121,8 +121,8 @@ def ramp_routes(
             return [((), 1.0)]
         ahead = [((f"highway_{node}", *r), q) for r, q in onward(node + 1)]
         ramp = ramp_at.get(node, "")
-        if ramp.startswith("off"):
-            return [((ramp,), p)] + [(r, (1 - p) * q) for r, q in ahead]
+        if ramp.startswith("off"):  # Flow's order: staying on first, leaving here last
+            return [(r, (1 - p) * q) for r, q in ahead] + [((ramp,), p)]
         return ahead
 
     choices: dict[str, tuple[RouteChoice, ...]] = {}
