@@ -154,6 +154,19 @@ def _sim_step(value: Any) -> str | None:
     return problem
 
 
+#: Flow's pyglet render modes (``SumoParams(render="drgb")``): frames drawn by flowrun
+FRAME_RENDER_MODES = ("rgb", "drgb", "gray", "dgray")
+
+
+def _render(value: Any) -> str | None:
+    if isinstance(value, bool) or value in FRAME_RENDER_MODES:
+        return None
+    return (
+        f"expected true, false or one of Flow's frame modes {', '.join(FRAME_RENDER_MODES)}, "
+        f"got {value!r}{did_you_mean(str(value), FRAME_RENDER_MODES)}"
+    )
+
+
 def _teleport_time(value: Any) -> str | None:
     """SUMO ``--time-to-teleport``: finite seconds; a negative value turns teleporting off."""
     problem = _finite(value, False)
@@ -289,6 +302,7 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (SumoParams, "sight_radius"): at_least(0, high=MAX_METRES, unit=M),
     (SumoParams, "pxpm"): positive(high=1e4),
     (SumoParams, "backend"): one_of("sim backend", SIM_BACKENDS),
+    (SumoParams, "render"): _render,
     (SumoParams, "teleport_time"): _teleport_time,
     (SumoParams, "lateral_resolution"): positive(high=100, unit=M),
     (EnvParams, "horizon"): _steps,

@@ -43,8 +43,12 @@ class SumoParams:
     Attributes:
         sim_step: seconds per simulation step (YAML key ``step``).
         seed: seed of every random draw (SUMO's and flowrun's); ``None`` means 0.
-        render: open ``sumo-gui`` through TraCI. Without a display flowrun warns and runs
-            headless instead, so scripts written for a desktop still run on a server.
+        render: ``True`` opens ``sumo-gui`` through TraCI. Without a display flowrun warns and
+            runs headless instead, so scripts written for a desktop still run on a server.
+            Flow's pyglet modes ``"rgb"``, ``"drgb"``, ``"gray"`` and ``"dgray"`` (one frame
+            per step for visualisation or a pixel observation) run headless and make the env
+            draw frames with flowrun's painter: ``env.render()`` returns the current frame
+            (``render_mode="rgb_array"`` is implied), grey for the gray modes.
         teleport_time: SUMO ``--time-to-teleport``; -1 disables teleporting of stuck cars.
         use_ballistic: ballistic position update instead of SUMO's default Euler update.
         lateral_resolution: SUMO's sublane model resolution in metres; ``None`` disables it.
@@ -75,7 +79,7 @@ class SumoParams:
 
     sim_step: float = 0.1
     seed: int | None = None
-    render: bool = False
+    render: bool | str = False
     teleport_time: float = -1.0
     use_ballistic: bool = False
     lateral_resolution: float | None = None

@@ -45,6 +45,8 @@ from flowrun.networks.base import Network
 from flowrun.utils.spaces import ActionClipper
 
 log = logging.getLogger(__name__)
+#: luminance weights of R, G, B (ITU-R BT.601): the grey of Flow's gray/dgray render modes
+GREY = np.array([0.299, 0.587, 0.114])
 
 
 def check_additional_params(cls: type, env_params: EnvParams) -> None:
@@ -123,8 +125,10 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         self.render_mode = render_mode
         self._own_dir = work_dir is None
         self.work_dir = Path(tempfile.mkdtemp(prefix="flowrun-")) if work_dir is None else work_dir
-        gui = bool(sim_params.render) and gui_available()
-        if sim_params.render and not gui:
+        if isinstance(sim_params.render, str) and render_mode is None:
+            self.render_mode = "rgb_array"  # Flow's frame modes (render="drgb"): env.render()
+        gui = sim_params.render is True and gui_available()
+        if sim_params.render is True and not gui:
             log.warning("render=True but no display or sumo-gui here: running headless")
         self.k = Kernel(sim_params, self.work_dir, gui=gui)
         self.k.network = NetworkKernel(network.spec, network=network)  # Flow: before reset
@@ -392,7 +396,10 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
             return None
         if self._painter is None:
             self._painter = EnvPainter()
-        return self._painter(self.k)
+        frame = self._painter(self.k)
+        if self.sim_params.render in ("gray", "dgray"):  # Flow's grey modes: luminance
+            frame = np.repeat((frame @ GREY).astype(np.uint8)[..., None], 3, axis=2)
+        return frame
 
     def terminate(self) -> None:
         """Flow's name for :meth:`close`."""

@@ -40,7 +40,7 @@ def flow_network(flow: FlowExperiment) -> Network:
 
 def make_flow_env(
     flow: FlowExperiment,
-    render: bool | None = None,
+    render: bool | str | None = None,
     evaluate: bool = False,
     render_mode: str | None = None,
     work_dir: Path | None = None,
@@ -49,14 +49,15 @@ def make_flow_env(
 
     Args:
         flow: the read ``flow_params``.
-        render: overrides ``sim.render`` when true (Flow's ``render or sim_params.render``).
+        render: overrides ``sim.render`` when true or a frame mode such as ``"drgb"`` (Flow's
+            ``render or sim_params.render``).
         evaluate: sets ``EnvParams.evaluate`` (Flow's ``env_constructor(evaluate=True)``).
         render_mode: Gymnasium's ``render_mode`` (``None`` or ``"rgb_array"``).
         work_dir: folder for the generated SUMO files (a private temporary one by default).
     """
     cfg = flow.config
     cls = flow.env_class if flow.env_class is not None else env_class(cfg)
-    sim = dataclasses.replace(cfg.sim, render=bool(render or cfg.sim.render))
+    sim = dataclasses.replace(cfg.sim, render=render or cfg.sim.render)  # or a mode
     env_params = dataclasses.replace(cfg.env, evaluate=True) if evaluate else cfg.env
     env: Env = cls(
         env_params,
@@ -75,7 +76,7 @@ def _base_name(params: Mapping[str, Any]) -> str:
 
 
 def make_create_env(
-    params: Mapping[str, Any], version: int = 0, render: bool | None = None
+    params: Mapping[str, Any], version: int = 0, render: bool | str | None = None
 ) -> tuple[Callable[..., Env], str]:
     """A creator of the ``flow_params`` environment and its Gymnasium id (Flow's signature).
 
@@ -105,7 +106,10 @@ def make_create_env(
 
 
 def env_constructor(
-    params: Mapping[str, Any], version: int = 0, render: bool | None = None, evaluate: bool = False
+    params: Mapping[str, Any],
+    version: int = 0,
+    render: bool | str | None = None,
+    evaluate: bool = False,
 ) -> Callable[..., Env]:
     """A creator of the ``flow_params`` environment (Flow's ``env_constructor``).
 
