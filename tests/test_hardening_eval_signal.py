@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from flowrun.experiment.rundir import read_status
+from flowrun.rundir.folders import read_status
 
 pytestmark = [pytest.mark.train, pytest.mark.sumo]
 pytest.importorskip("stable_baselines3")

@@ -14,8 +14,8 @@ import pytest
 
 from flowrun.config.loader import load_config
 from flowrun.errors import SimulationError
-from flowrun.experiment.rundir import read_status
-from flowrun.training.runstate import StopRequest
+from flowrun.rundir.folders import read_status
+from flowrun.rundir.train_state import StopRequest
 
 ROOT = Path(__file__).resolve().parent.parent
 ev = importlib.import_module("flowrun.training.evaluate")  # the package exports a function of

@@ -12,7 +12,7 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.experiment.rundir import mark_done, mark_running
+from flowrun.rundir.folders import mark_done, mark_running
 
 pytest.importorskip("stable_baselines3")
 

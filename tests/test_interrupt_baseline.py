@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from flowrun.errors import RecordingError
-from flowrun.experiment.rundir import is_complete, read_status
 from flowrun.recording.reader import open_log
+from flowrun.rundir.folders import is_complete, read_status
 
 pytestmark = pytest.mark.sumo
 

@@ -20,8 +20,8 @@ from flowrun.config.loader import load_config
 from flowrun.config.params import VehicleParams
 from flowrun.errors import ConfigError
 from flowrun.experiment.baseline import run_baseline
-from flowrun.experiment.rundir import is_complete
 from flowrun.recording.reader import open_log
+from flowrun.rundir.folders import is_complete
 
 pytestmark = pytest.mark.sumo
 

@@ -23,8 +23,8 @@ from flowrun.cli.main import app
 from flowrun.config.loader import load_config
 from flowrun.errors import ConfigError, RecordingError
 from flowrun.experiment.baseline import run_baseline
-from flowrun.experiment.rundir import is_complete, read_status
 from flowrun.recording.reader import open_log
+from flowrun.rundir.folders import is_complete, read_status
 
 pytestmark = pytest.mark.sumo
 

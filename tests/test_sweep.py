@@ -20,7 +20,6 @@ from typer.testing import CliRunner
 from flowrun.cli.main import app
 from flowrun.config.loader import load_config
 from flowrun.errors import ConfigError
-from flowrun.experiment.rundir import is_complete, read_status
 from flowrun.experiment.sweep import (
     check_metric,
     finished_folder,
@@ -31,6 +30,7 @@ from flowrun.experiment.sweep import (
 )
 from flowrun.experiment.sweep_report import plot_metric, write_tables
 from flowrun.recording.reader import open_log
+from flowrun.rundir.folders import is_complete, read_status
 
 ROOT = Path(__file__).resolve().parent.parent
 SUGIYAMA = ROOT / "configs" / "sugiyama.yaml"

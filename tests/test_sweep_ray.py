@@ -23,8 +23,8 @@ pytest.importorskip("ray", reason="needs the rllib extra: pip install 'flowrun[r
 import ray
 
 from flowrun.cli.main import app
-from flowrun.experiment.rundir import read_status
 from flowrun.recording.reader import open_log
+from flowrun.rundir.folders import read_status
 
 SUGIYAMA = Path(__file__).resolve().parent.parent / "configs" / "sugiyama.yaml"
 FLOWRUN = str(Path(sys.executable).parent / "flowrun")

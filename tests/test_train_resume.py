@@ -12,8 +12,8 @@ from typer.testing import CliRunner
 
 from flowrun.cli.main import app
 from flowrun.config.loader import load_config
+from flowrun.rundir.train_state import RunLock, run_state
 from flowrun.training.periodic_eval import EVAL_LOG, EVALUATIONS, EvalHistory, numpy_policy
-from flowrun.training.runstate import RunLock, run_state
 
 pytestmark = pytest.mark.train
 pytest.importorskip("stable_baselines3")

@@ -18,9 +18,9 @@ from pathlib import Path
 
 import pytest
 
-from flowrun.experiment.rundir import read_status
 from flowrun.recording.reader import open_log
-from flowrun.training.runstate import run_state
+from flowrun.rundir.folders import read_status
+from flowrun.rundir.train_state import run_state
 
 pytestmark = pytest.mark.train
 pytest.importorskip("stable_baselines3")

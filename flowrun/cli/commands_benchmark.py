@@ -127,7 +127,7 @@ def benchmark(
     """
     from flowrun.experiment import benchmark as bm
     from flowrun.experiment.benchmark_run import folder_name
-    from flowrun.experiment.rundir import check_out_dir, unique_dir
+    from flowrun.rundir.folders import check_out_dir, unique_dir
 
     chosen = bm.select(names or ["all"])
     if seeds < 1:

@@ -37,10 +37,10 @@ from flowrun.cli.common import (
     overrides_with_seed,
 )
 from flowrun.errors import ConfigError, FlowrunError
-from flowrun.experiment.rundir import Interrupted
 from flowrun.experiment.sweep import SweepPlan, SweepPoint
 from flowrun.experiment.sweep_procs import PointProcess
 from flowrun.experiment.sweep_ray import NOT_STARTED
+from flowrun.rundir.folders import Interrupted
 
 #: How a sweep runs its points: ``local`` processes, or ``ray`` tasks.
 BACKENDS = ("local", "ray")
@@ -227,7 +227,7 @@ def sweep(
     """
     from flowrun.config.flow_module import load_any_config
     from flowrun.experiment import sweep as sw
-    from flowrun.experiment.rundir import check_out_dir
+    from flowrun.rundir.folders import check_out_dir
 
     axes = sw.parse_grid(grid)
     sw.check_metric(metric, has_signals=True)

@@ -33,7 +33,7 @@ from flowrun.errors import FlowrunError
 
 if TYPE_CHECKING:
     from flowrun.experiment.metrics import RunMetrics
-    from flowrun.training.runstate import StopRequest
+    from flowrun.rundir.train_state import StopRequest
 
 RunDirArg = Annotated[Path, typer.Argument(help="A train run folder.", show_default=False)]
 EvalOutOpt = Annotated[
@@ -53,7 +53,7 @@ def not_a_training_run(run_dir: Path) -> FlowrunError:
 def _check_steps_left(run_dir: Path, total: int) -> None:
     """Refuse to resume a complete run that has already trained ``total`` steps (it would
     train nothing and replace its final model and evaluation)."""
-    from flowrun.training.runstate import read_metrics, run_state
+    from flowrun.rundir.train_state import read_metrics, run_state
 
     done = (read_metrics(run_dir) or {}).get("timesteps")
     if run_state(run_dir) == "complete" and isinstance(done, int) and done >= total:
@@ -71,7 +71,7 @@ def stop_on_signals() -> Iterator[StopRequest]:
     Nothing is raised from inside the handler for the first signal: an exception there could
     land anywhere (half a log chunk written, a pipe to an env process half read).
     """
-    from flowrun.training.runstate import StopRequest
+    from flowrun.rundir.train_state import StopRequest
 
     request = StopRequest()
 
@@ -236,9 +236,9 @@ def _evaluate_and_show(
     model: str,
     out: Path | None,
 ) -> None:
+    from flowrun.rundir.train_state import run_state
     from flowrun.training.evaluate import eval_config, evaluate, model_path
     from flowrun.training.rllib import evaluate_rllib, is_rllib_run
-    from flowrun.training.runstate import run_state
 
     evaluate_run = evaluate_rllib if is_rllib_run(run_dir) else evaluate
 

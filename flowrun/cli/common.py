@@ -18,7 +18,7 @@ A command that runs nothing says in its help why it takes no ``--seed``/``--set`
 (:data:`NO_SEED_OR_SET`).
 
 Interruptions: inside :func:`interrupt_between_steps` (or :func:`sigterm_as_interrupt`),
-Ctrl-C and SIGTERM raise :class:`~flowrun.experiment.rundir.Interrupted`, a
+Ctrl-C and SIGTERM raise :class:`~flowrun.rundir.folders.Interrupted`, a
 ``KeyboardInterrupt`` that carries the signal; :func:`interrupted_exit` turns it into
 exit code 130 (SIGINT) or 143 (SIGTERM).
 """
@@ -176,7 +176,7 @@ def sigterm_as_interrupt() -> Iterator[None]:
     Ctrl-C raises :class:`Interrupted` too, so the exit code can tell the two apart.
     """
 
-    from flowrun.experiment.rundir import Interrupted
+    from flowrun.rundir.folders import Interrupted
 
     def handler(signum: int, frame: Any) -> None:
         raise Interrupted(signum)
@@ -193,7 +193,7 @@ def interrupt_between_steps() -> Iterator[Callable[[], None]]:
     came. Raising from inside the signal handler could land in the middle of writing the log
     (the mcap writer compressing a chunk) and silently drop that chunk's steps.
     """
-    from flowrun.experiment.rundir import Interrupted
+    from flowrun.rundir.folders import Interrupted
 
     received: list[int] = []
 
@@ -212,7 +212,7 @@ def interrupt_between_steps() -> Iterator[Callable[[], None]]:
 
 def interrupted_exit(err: KeyboardInterrupt, message: str) -> typer.Exit:
     """Print ``interrupted: message`` and return the exit to raise (130 SIGINT, 143 SIGTERM)."""
-    from flowrun.experiment.rundir import exit_code_of
+    from flowrun.rundir.folders import exit_code_of
 
     typer.secho(f"interrupted: {message}", err=True, fg=typer.colors.YELLOW)
     return typer.Exit(code=exit_code_of(err))

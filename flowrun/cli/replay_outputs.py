@@ -10,7 +10,6 @@ from pathlib import Path
 from rich.table import Table
 
 from flowrun.errors import FlowrunError, RecordingError
-from flowrun.experiment.rundir import unique_dir
 from flowrun.recording import McapLog, McapRecorder
 from flowrun.recording.atomic import new_file
 from flowrun.replay import (
@@ -27,6 +26,7 @@ from flowrun.replay import (
 from flowrun.replay.plots import plot_stride
 from flowrun.replay.signal_plots import plot_signals
 from flowrun.replay.signals import intersection_rows, signal_series
+from flowrun.rundir.folders import unique_dir
 
 
 class PlotKind(StrEnum):

@@ -18,22 +18,22 @@ from flowrun.envs.frames import network_metadata
 from flowrun.envs.render import kernel_road, snapshot, vehicle_lengths
 from flowrun.errors import ConfigError
 from flowrun.experiment.metrics import RunMetrics
-from flowrun.experiment.rundir import (
-    COMPLETE,
-    FAILED,
-    INTERRUPTED,
-    RUNNING,
-    check_out_dir,
-    start_run,
-    tracked_run,
-    versions,
-    write_json,
-)
 from flowrun.experiment.runner import Experiment, FrameSink
 from flowrun.experiment.signal_baselines import SignalMetrics, SignalRun
 from flowrun.fastring.plan import refuse_numpy_backend
 from flowrun.recording.writer import McapRecorder
 from flowrun.render import Animation, Road, Snapshot, draw_run, write_animation
+from flowrun.rundir.folders import (
+    COMPLETE,
+    FAILED,
+    INTERRUPTED,
+    RUNNING,
+    check_out_dir,
+    log_metadata,
+    start_run,
+    tracked_run,
+    write_json,
+)
 
 log = logging.getLogger(__name__)
 
@@ -89,27 +89,6 @@ def resolve_steps(cfg: ExperimentConfig, steps: int | None) -> int:
     return int(horizon)
 
 
-def log_metadata(
-    cfg: ExperimentConfig, seed: int, run: int, record_every: int = 1
-) -> dict[str, str]:
-    """The MCAP ``flowrun`` metadata record (what ``flowrun replay`` shows and uses)."""
-    found = versions()
-    meta = {f"{name.replace('-', '_')}_version": v for name, v in found.items()}
-    meta["sumo_version"] = found.get("eclipse-sumo", "unknown")
-    meta.update(
-        {
-            "config_name": cfg.name,
-            "seed": str(seed),
-            "run": str(run),
-            "sim_step": repr(cfg.sim.sim_step),
-            "sims_per_step": str(cfg.env.sims_per_step),
-            "record_every": str(record_every),
-            "config": dump_config(cfg),
-        }
-    )
-    return meta
-
-
 def open_run_log(
     path: Path,
     env: Env,
@@ -152,7 +131,7 @@ def run_baseline(
 
     The seed is ``cfg.sim.seed`` (0 when unset); run ``i`` resets with seed ``seed + i``.
     The folder's ``status.json`` says ``running`` from the start and how the run ended at
-    the end (see :mod:`flowrun.experiment.rundir`); ``metrics.json`` is rewritten after
+    the end (see :mod:`flowrun.rundir.folders`); ``metrics.json`` is rewritten after
     every run, so even a killed run leaves the runs it finished. Interrupted by
     Ctrl-C/SIGTERM, the current log is finished, ``metrics.json`` and ``status.json`` say
     ``interrupted``, and the ``KeyboardInterrupt`` propagates.

@@ -10,7 +10,7 @@ from typing import Any
 
 from flowrun.experiment.benchmark import FAMILIES
 from flowrun.experiment.benchmark_run import BenchmarkPlan
-from flowrun.experiment.rundir import write_json
+from flowrun.rundir.folders import write_json
 
 
 def mean_std(part: dict[str, Any] | None) -> str:

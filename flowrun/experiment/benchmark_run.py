@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from flowrun.experiment.benchmark import Benchmark, metric_value
-from flowrun.experiment.rundir import is_complete, read_status
+from flowrun.rundir.folders import is_complete, read_status
 
 #: The command that starts a flowrun command in a child process.
 FLOWRUN = (sys.executable, "-m", "flowrun.cli.main")

@@ -20,9 +20,9 @@ from flowrun.config.model import ExperimentConfig
 from flowrun.envs.base import Env
 from flowrun.envs.frames import network_metadata
 from flowrun.errors import ConfigError
-from flowrun.experiment.rundir import unique_dir
 from flowrun.flow_values import FLOW_ERROR, FLOW_NO_GAP
 from flowrun.recording.writer import McapRecorder
+from flowrun.rundir.folders import unique_dir
 
 log = logging.getLogger(__name__)
 

@@ -4,7 +4,7 @@ The plan (:func:`plan_sweep`) is pure: the grid ``--grid key=v1,v2`` (several mu
 seeds, a sweep folder named after what is swept, one point per combination. Each point is an
 ordinary ``flowrun baseline`` run folder inside the sweep folder, named after its values
 (``network.length=230__seed=0``). A point with a completed folder
-(:func:`~flowrun.experiment.rundir.is_complete`) is skipped when the same sweep runs again, so
+(:func:`~flowrun.rundir.folders.is_complete`) is skipped when the same sweep runs again, so
 an interrupted sweep resumes where it stopped (an interrupted or cut point's folder stays as
 it is: the point runs again in ``<label>-1``).
 
@@ -30,9 +30,9 @@ from flowrun.config.checks import MAX_SEED
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, FlowrunError
-from flowrun.experiment.folder_lock import FolderLock
 from flowrun.experiment.metrics import RunMetrics
-from flowrun.experiment.rundir import is_complete, read_status, write_json
+from flowrun.rundir.folders import is_complete, read_status, write_json
+from flowrun.rundir.lock import FolderLock
 from flowrun.suggest import unknown_name
 
 #: Per-run metrics a sweep can plot (``metrics.json`` run rows), besides the signal metrics.

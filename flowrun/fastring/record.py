@@ -19,12 +19,12 @@ import numpy as np
 
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
-from flowrun.experiment.baseline import log_metadata
 from flowrun.fastring.batch import RingState
 from flowrun.fastring.plan import ring_plan
 from flowrun.fastring.vec_env import RingEpisodes
 from flowrun.recording.frames import StepStats, VehicleFrame
 from flowrun.recording.writer import McapRecorder
+from flowrun.rundir.folders import log_metadata
 from flowrun.types import BoolArray
 
 #: SUMO's default lane width, m: lane centres lie half of it outside the ring's radius

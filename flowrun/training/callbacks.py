@@ -14,7 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from flowrun.experiment.rundir import write_json
+from flowrun.rundir.folders import write_json
 from flowrun.training.deps import require
 
 if TYPE_CHECKING:

@@ -27,7 +27,8 @@ from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.experiment.baseline import open_run_log
 from flowrun.experiment.metrics import RunMetrics
-from flowrun.experiment.rundir import (
+from flowrun.experiment.runner import Experiment, FrameSink
+from flowrun.rundir.folders import (
     check_sumo_path,
     exit_code_of,
     mark_done,
@@ -35,7 +36,6 @@ from flowrun.experiment.rundir import (
     unique_dir,
     write_json,
 )
-from flowrun.experiment.runner import Experiment, FrameSink
 from flowrun.training.algorithms import algorithm_class
 from flowrun.training.periodic_eval import all_human
 from flowrun.training.trainer import (
@@ -63,7 +63,7 @@ class EvalResult:
         policy: one entry per policy episode.
         baseline: one entry per baseline episode (same seeds).
         logs: MCAP files written.
-        run_status: the training run's state (:func:`flowrun.training.runstate.run_state`):
+        run_status: the training run's state (:func:`flowrun.rundir.train_state.run_state`):
             anything but ``complete`` means the policy comes from an unfinished run.
     """
 
@@ -159,7 +159,7 @@ def evaluate(
     (``policy_<i>.mcap``, ``baseline_<i>.mcap``) to ``<out>/<timestamp>-<seed>/``, ``out``
     defaulting to ``<run>/eval``. ``should_stop``: see :func:`run_evaluation`.
     """
-    from flowrun.training.runstate import run_state
+    from flowrun.rundir.train_state import run_state
 
     if episodes < 1:
         raise ConfigError(f"--episodes must be >= 1, got {episodes}")
@@ -212,10 +212,10 @@ def run_evaluation(
 
     Args:
         model: the model (file or checkpoint) rolled out.
-        run_status: the training run's state (:func:`flowrun.training.runstate.run_state`).
+        run_status: the training run's state (:func:`flowrun.rundir.train_state.run_state`).
         act: the policy, ``obs -> action``.
         should_stop: whether Ctrl-C/SIGTERM was received (a
-            :class:`~flowrun.training.runstate.StopRequest`): an error raised after that
+            :class:`~flowrun.rundir.train_state.StopRequest`): an error raised after that
             (the signal also killed netconvert or SUMO) labels the folder ``interrupted``
             with exit code 128 + the signal, not ``failed``.
     """

@@ -53,7 +53,7 @@ def resume_state(run_dir: Path) -> dict[str, Any]:
 
 def _never_trained(run_dir: Path) -> bool:
     """Whether the run stopped before its first step (its ``metrics.json`` says 0 steps)."""
-    from flowrun.training.runstate import read_metrics
+    from flowrun.rundir.train_state import read_metrics
 
     metrics = read_metrics(run_dir)
     return metrics is not None and metrics.get("timesteps") == 0

@@ -22,8 +22,9 @@ from typing import TYPE_CHECKING, Any
 from flowrun.config.model import ExperimentConfig, TrainConfig
 from flowrun.envs.factory import env_class
 from flowrun.errors import ConfigError, TrainingError
-from flowrun.experiment.rundir import exit_code_of, mark_done, mark_running, start_run
 from flowrun.fastring.plan import check_numpy_backend
+from flowrun.rundir.folders import exit_code_of, mark_done, mark_running, start_run
+from flowrun.rundir.train_state import RunLock, StopRequest, write_status
 from flowrun.training.algorithms import algorithm_class, build_hyperparams
 from flowrun.training.callbacks import (
     StopRequested,
@@ -43,7 +44,6 @@ from flowrun.training.resume import (
 from flowrun.training.resume import (
     resume_config as resume_config,
 )
-from flowrun.training.runstate import RunLock, StopRequest, write_status
 from flowrun.training.timing import TrainTiming, timed_vec_env, timing_callback
 from flowrun.training.vecenv import make_vec_env, wrap_normalize
 

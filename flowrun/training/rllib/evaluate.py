@@ -20,6 +20,7 @@ import numpy as np
 
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, TrainingError
+from flowrun.rundir.train_state import run_state
 from flowrun.training.evaluate import (
     EvalProgress,
     EvalResult,
@@ -29,7 +30,6 @@ from flowrun.training.evaluate import (
 )
 from flowrun.training.rllib.deps import require_ray
 from flowrun.training.rllib.train import BEST_CHECKPOINT, FINAL_CHECKPOINT
-from flowrun.training.runstate import run_state
 from flowrun.training.trainer import train_section
 
 #: Where an RLlib (new API stack) checkpoint keeps its RL modules.

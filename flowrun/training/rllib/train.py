@@ -25,13 +25,14 @@ from typing import Any
 
 from flowrun.config.model import ExperimentConfig, TrainConfig
 from flowrun.errors import TrainingError
-from flowrun.experiment.rundir import (
+from flowrun.rundir.folders import (
     exit_code_of,
     mark_done,
     mark_running,
     start_run,
     write_json,
 )
+from flowrun.rundir.train_state import RunLock
 from flowrun.training.callbacks import TrainProgress
 from flowrun.training.resume import note_resume
 from flowrun.training.rllib.cluster import RaySession, ray_session
@@ -43,7 +44,6 @@ from flowrun.training.rllib.options import (
     env_runners,
     steps_per_iteration,
 )
-from flowrun.training.runstate import RunLock
 from flowrun.training.trainer import TrainResult, train_section, train_seed
 
 log = logging.getLogger(__name__)

@@ -32,7 +32,12 @@ from pathlib import Path
 from flowrun.config.dump import dump_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, FlowrunError
-from flowrun.experiment.runstatus import (
+from flowrun.rundir.safeio import (
+    WRITE_ERRORS,
+    describe_os_error,
+    write_json,
+)
+from flowrun.rundir.status import (
     COMPLETE,
     CUT,
     FAILED,
@@ -46,11 +51,6 @@ from flowrun.experiment.runstatus import (
     mark_done,
     mark_running,
     read_status,
-)
-from flowrun.experiment.safeio import (
-    WRITE_ERRORS,
-    describe_os_error,
-    write_json,
 )
 
 __all__ = [
@@ -67,6 +67,7 @@ __all__ = [
     "describe_os_error",
     "exit_code_of",
     "is_complete",
+    "log_metadata",
     "mark_done",
     "mark_running",
     "read_status",
@@ -107,6 +108,27 @@ def versions() -> dict[str, str]:
         except PackageNotFoundError:
             continue
     return found
+
+
+def log_metadata(
+    cfg: ExperimentConfig, seed: int, run: int, record_every: int = 1
+) -> dict[str, str]:
+    """The MCAP ``flowrun`` metadata record (what ``flowrun replay`` shows and uses)."""
+    found = versions()
+    meta = {f"{name.replace('-', '_')}_version": v for name, v in found.items()}
+    meta["sumo_version"] = found.get("eclipse-sumo", "unknown")
+    meta.update(
+        {
+            "config_name": cfg.name,
+            "seed": str(seed),
+            "run": str(run),
+            "sim_step": repr(cfg.sim.sim_step),
+            "sims_per_step": str(cfg.env.sims_per_step),
+            "record_every": str(record_every),
+            "config": dump_config(cfg),
+        }
+    )
+    return meta
 
 
 def unique_dir(base: Path) -> Path:

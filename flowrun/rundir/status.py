@@ -4,7 +4,7 @@ A run folder says ``running`` (with pid, host and the process's start time) from
 at its end, ``complete``, ``interrupted`` (with exit code 130/143) or ``failed`` (with the
 error). :func:`read_status` answers ``cut`` for a folder still saying ``running`` whose process
 is gone (killed, power cut), so nothing takes it for finished. The folder itself and
-``tracked_run`` are in :mod:`flowrun.experiment.rundir` (which re-exports these names).
+``tracked_run`` are in :mod:`flowrun.rundir.folders` (which re-exports these names).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from flowrun.experiment.safeio import json_text, write_json
+from flowrun.rundir.safeio import json_text, write_json
 
 STATUS_FILE = "status.json"
 RUNNING, COMPLETE, INTERRUPTED, FAILED, CUT = "running", "complete", "interrupted", "failed", "cut"

@@ -1,6 +1,6 @@
 """A train run folder's state: a lock held while training, its status, and stop requests.
 
-``status.json`` (:mod:`flowrun.experiment.runstatus`, shared by every command) and
+``status.json`` (:mod:`flowrun.rundir.status`, shared by every command) and
 ``metrics.json`` say ``running`` from the start of training, then ``complete``,
 ``interrupted`` (Ctrl-C/SIGTERM: a checkpoint was saved) or ``failed``. A run killed outright
 (SIGKILL, power loss) still says ``running`` but its process is gone and nobody holds its
@@ -16,9 +16,9 @@ from pathlib import Path
 from typing import Any
 
 from flowrun.errors import TrainingError
-from flowrun.experiment.folder_lock import FolderLock
-from flowrun.experiment.folder_lock import is_locked as lock_held
-from flowrun.experiment.rundir import Interrupted, read_status, write_json
+from flowrun.rundir.folders import Interrupted, read_status, write_json
+from flowrun.rundir.lock import FolderLock
+from flowrun.rundir.lock import is_locked as lock_held
 
 LOCK_FILE = ".train.lock"
 METRICS = "metrics.json"
