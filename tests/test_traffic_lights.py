@@ -90,12 +90,30 @@ def test_unknown_tls_type_suggests_the_close_one() -> None:
         TrafficLightParams().add("center0", tls_type="actuatd")
 
 
-def test_state_length_must_match_the_junctions_links() -> None:
+def test_a_state_shorter_than_the_junctions_links_is_an_error() -> None:
     tl = TrafficLightParams()
-    tl.add("center1", phases=[{"duration": 5, "state": "GrGrGr"}])
-    with pytest.raises(ConfigError, match="6 characters but junction 'center1' controls 4") as e:
+    tl.add("center1", phases=[{"duration": 5, "state": "GrG"}])
+    with pytest.raises(ConfigError, match="3 characters but junction 'center1' controls 4") as e:
         resolve_programs(tl, LIGHTS)
     assert e.value.path == "traffic_lights.center1.phases[0].state"
+
+
+def test_longer_states_run_cut_to_the_links_with_one_warning(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """As SUMO runs them (Flow's grid example gives 12-character states to 4-link lights)."""
+    tl = TrafficLightParams()
+    tl.add("center1", phases=[{"duration": 31, "state": "GrGrGrGrGrGr"},
+                              {"duration": 6, "state": "yryryryryryr"}])  # fmt: skip
+    with caplog.at_level("WARNING", logger="flowrun.networks.tls"):
+        (program,) = resolve_programs(tl, LIGHTS, warn=True)
+    assert [p.state for p in program.phases] == ["GrGr", "yryr"]
+    (record,) = caplog.records
+    assert "'center1' controls 4 links" in record.getMessage()
+    assert "'GrGrGrGr', 'yryryryr'" in record.getMessage()
+    caplog.clear()
+    resolve_programs(tl, LIGHTS)  # when the kernel writes the file: no second warning
+    assert not caplog.records
 
 
 def test_light_on_a_node_without_one_is_an_error_with_a_suggestion() -> None:

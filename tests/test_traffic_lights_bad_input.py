@@ -83,7 +83,7 @@ def bad_config(tmp_path: Path, case: str) -> Path:
         "rl_without_lights": GRID0.replace(
             "  speed_limit: 35\n", "  speed_limit: 35\n  traffic_lights: false\n"
         ),
-        "state_length": GRID0 + LIGHT.format(node="center4", state="GrGrG"),
+        "state_length": GRID0 + LIGHT.format(node="center4", state="GrG"),
         "signal_env_on_a_ring": SUGIYAMA.replace("class: AccelEnv", "class: TrafficLightGridPOEnv")
         .replace(SUGIYAMA_PARAMS, "{target_velocity: 50, switch_time: 3, num_observed: 2, "
                  "discrete: false, tl_type: actuated}"),
@@ -112,8 +112,8 @@ def line_of(path: Path, text: str) -> int:
          "true"),
         ("rl_without_lights", "validate", "traffic_lights: false",
          "network.traffic_lights: TrafficLightGridBenchmarkEnv switches traffic lights"),
-        ("state_length", "baseline", "state: GrGrG",
-         "state 'GrGrG' has 5 characters but junction 'center4' controls 4 links"),
+        ("state_length", "baseline", "state: GrG",
+         "state 'GrG' has 3 characters but junction 'center4' controls 4 links"),
         ("signal_env_on_a_ring", "baseline", "type: ring",
          "TrafficLightGridPOEnv switches traffic lights, but network 'ring' has none; use "
          "network type traffic_light_grid, or put lights on its junctions"),

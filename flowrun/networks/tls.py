@@ -9,6 +9,7 @@ becomes the light's active one.
 
 from __future__ import annotations
 
+import logging
 import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
@@ -20,6 +21,8 @@ from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
 from flowrun.networks.build import build_network
 from flowrun.networks.tls_detectors import check_detector_room
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -49,15 +52,20 @@ def read_net_lights(net_file: Path) -> dict[str, NetLight]:
     return lights
 
 
-def resolve_programs(params: TrafficLightParams, lights: dict[str, NetLight]) -> list[TlsProgram]:
+def resolve_programs(
+    params: TrafficLightParams, lights: dict[str, NetLight], warn: bool = False
+) -> list[TlsProgram]:
     """The programs of ``params`` for the network's ``lights``, checked.
 
     A program without phases takes the junction's default phases (SUMO's default program,
     run with the program's type, e.g. actuated). A static program without phases loads nothing.
+    States longer than the junction's links are cut to its links, as SUMO runs them (it
+    ignores the extra characters with a warning; Flow's grid example relies on it); with
+    ``warn``, one warning per light names the ignored characters.
 
     Raises:
-        ConfigError: a light on a node without one, or a state whose length is not the
-            junction's number of controlled links (names node, phase, expected length).
+        ConfigError: a light on a node without one, or a state shorter than the junction's
+            number of controlled links (names node, phase, expected length).
     """
     out = []
     for program in params.programs(lights):
@@ -67,7 +75,7 @@ def resolve_programs(params: TrafficLightParams, lights: dict[str, NetLight]) ->
                 continue
             program = replace(program, phases=light.phases)
         for i, phase in enumerate(program.phases):
-            if len(phase.state) != light.num_links:
+            if len(phase.state) < light.num_links:
                 example = f"; its default program starts {light.phases[0].state!r}" \
                     if light.phases else ""  # fmt: skip
                 raise ConfigError(
@@ -76,8 +84,23 @@ def resolve_programs(params: TrafficLightParams, lights: dict[str, NetLight]) ->
                     f"link, in SUMO's link order{example})",
                     path=f"traffic_lights.{program.node_id}.phases[{i}].state",
                 )
-        out.append(program)
+        out.append(_cut_to_links(program, light.num_links, warn))
     return out
+
+
+def _cut_to_links(program: TlsProgram, n: int, warn: bool) -> TlsProgram:
+    """``program`` with every state cut to the junction's ``n`` links (warned once)."""
+    extra = [p.state[n:] for p in program.phases if len(p.state) > n]
+    if not extra:
+        return program
+    if warn:
+        log.warning(
+            "traffic light %r controls %d links; its states are longer and SUMO ignores "
+            "their last characters (%s)",
+            program.node_id, n, ", ".join(repr(x) for x in dict.fromkeys(extra)),
+        )  # fmt: skip
+    phases = tuple(replace(p, state=p.state[:n]) for p in program.phases)
+    return replace(program, phases=phases)
 
 
 def _num(x: float) -> str:
@@ -136,4 +159,5 @@ def check_programs(network: Network, params: TrafficLightParams) -> None:
     """
     with tempfile.TemporaryDirectory(prefix="flowrun-tls-") as tmp:
         net_file = build_network(network.spec, Path(tmp), name=network.network_type or "network")
-        check_detector_room(resolve_programs(params, read_net_lights(net_file)), net_file)
+        programs = resolve_programs(params, read_net_lights(net_file), warn=True)
+        check_detector_room(programs, net_file)
