@@ -17,8 +17,8 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from flowrun.envs.defaults import grid_config
 from flowrun.envs.factory import make_env
-from flowrun.envs.grid_defaults import grid_config
 
 #: (label, rows, cols, env class, evaluate)
 CASES: tuple[tuple[str, int, int, str, bool], ...] = (

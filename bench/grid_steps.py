@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 
 from flowrun.envs.base import Env
+from flowrun.envs.defaults import grid_config
 from flowrun.envs.factory import make_env
-from flowrun.envs.grid_defaults import grid_config
 
 GRIDS = {"grid0": (3, 3), "grid1": (5, 5)}
 

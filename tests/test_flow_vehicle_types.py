@@ -16,8 +16,7 @@ import pytest
 
 from flowrun.config.loader import load_config
 from flowrun.config.vtype import vtype_attributes
-from flowrun.envs.defaults import merge0_config
-from flowrun.envs.grid_defaults import grid_config
+from flowrun.envs.defaults import grid_config, merge0_config
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 

@@ -7,7 +7,7 @@ from dataclasses import replace
 import pytest
 
 from flowrun.config.params import InFlows, NetParams
-from flowrun.envs.grid_defaults import EDGE_INFLOW, V_ENTER, entry_edges, grid_config
+from flowrun.envs.defaults import EDGE_INFLOW, V_ENTER, entry_edges, grid_config
 from flowrun.errors import ConfigError
 from flowrun.experiment.signal_baselines import run_signal_baseline
 

@@ -1,9 +1,12 @@
 """Environments: Flow's ``Env`` base on Gymnasium, the ring tasks and the merge."""
 
 from flowrun.envs.base import Env
-from flowrun.envs.bottleneck import BottleneckEnv
-from flowrun.envs.bottleneck_accel import BottleneckAccelEnv
-from flowrun.envs.bottleneck_velocity import BottleneckDesiredVelocityEnv, DesiredVelocityEnv
+from flowrun.envs.bottleneck import (
+    BottleneckAccelEnv,
+    BottleneckDesiredVelocityEnv,
+    BottleneckEnv,
+    DesiredVelocityEnv,
+)
 from flowrun.envs.merge import MergePOEnv
 from flowrun.envs.registry import env_names, register_envs, resolve_env_class
 from flowrun.envs.ring.accel import AccelEnv

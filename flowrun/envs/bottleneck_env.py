@@ -1,10 +1,13 @@
-"""Flow's older module path ``flow.envs.bottleneck_env`` (``DesiredVelocityEnv`` and co.)."""
+"""Flow compatibility: re-exports. Flow's older module path ``flow.envs.bottleneck_env``
+(``DesiredVelocityEnv`` and co.); the envs live in :mod:`flowrun.envs.bottleneck`."""
 
-from flowrun.envs.bottleneck import ADDITIONAL_ENV_PARAMS, BottleneckEnv
-from flowrun.envs.bottleneck_accel import ADDITIONAL_RL_ENV_PARAMS, BottleneckAccelEnv
-from flowrun.envs.bottleneck_velocity import (
+from flowrun.envs.bottleneck import (
+    ADDITIONAL_ENV_PARAMS,
+    ADDITIONAL_RL_ENV_PARAMS,
     ADDITIONAL_VSL_ENV_PARAMS,
+    BottleneckAccelEnv,
     BottleneckDesiredVelocityEnv,
+    BottleneckEnv,
     DesiredVelocityEnv,
 )
 

@@ -1,4 +1,5 @@
-"""Flow < 0.5 module path ``flow.envs.green_wave_env`` (flowrun's traffic-light grid envs)."""
+"""Flow compatibility: re-exports. Flow < 0.5 module path ``flow.envs.green_wave_env``; the
+envs live in :mod:`flowrun.envs.traffic_light_grid`."""
 
 from flowrun.envs.traffic_light_grid import (
     GreenWaveTestEnv,

@@ -15,9 +15,11 @@ from flowrun.suggest import did_you_mean, unknown_name
 
 
 def _builtin() -> dict[str, type]:
-    from flowrun.envs.bottleneck import BottleneckEnv
-    from flowrun.envs.bottleneck_accel import BottleneckAccelEnv
-    from flowrun.envs.bottleneck_velocity import BottleneckDesiredVelocityEnv
+    from flowrun.envs.bottleneck import (
+        BottleneckAccelEnv,
+        BottleneckDesiredVelocityEnv,
+        BottleneckEnv,
+    )
     from flowrun.envs.merge import MergePOEnv
     from flowrun.envs.ring.accel import AccelEnv
     from flowrun.envs.ring.lane_change import LaneChangeAccelEnv, LaneChangeAccelPOEnv
@@ -48,12 +50,6 @@ def _builtin() -> dict[str, type]:
             TrafficLightGridBenchmarkEnv,
         )
     }
-
-
-#: envs registered with their own network's default experiment (Flow's bottleneck0)
-BOTTLENECK_ENVS = frozenset(
-    {"BottleneckEnv", "BottleneckAccelEnv", "BottleneckDesiredVelocityEnv", "DesiredVelocityEnv"}
-)
 
 
 def env_names() -> list[str]:
@@ -145,9 +141,9 @@ def _env_class(module: ModuleType, module_name: str, attr: str, name: str) -> ty
 def register_envs() -> None:
     """Register every built-in env as ``flowrun/<Name>-v0`` with Gymnasium (idempotent).
 
-    Without a ``config`` an env runs its default experiment: Flow's merge0 for
-    ``MergePOEnv`` (:mod:`flowrun.envs.defaults`), Flow's bottleneck0 for the bottleneck
-    envs (:mod:`flowrun.envs.bottleneck_defaults`), the ring for the others.
+    Without a ``config`` an env runs its default experiment (:mod:`flowrun.envs.defaults`):
+    Flow's merge0 for ``MergePOEnv``, bottleneck0 for the bottleneck envs, grid0 for the
+    grid envs, the ring for the others.
     """
     from flowrun.envs.defaults import DEFAULT_CONFIGS
 
@@ -157,8 +153,6 @@ def register_envs() -> None:
             continue
         own_default = name in DEFAULT_CONFIGS
         entry = "defaults:make_with_default" if own_default else "factory:make_registered"
-        if name in BOTTLENECK_ENVS:
-            entry = "bottleneck_defaults:make_bottleneck"
         gymnasium.register(
             id=env_id,
             entry_point=f"flowrun.envs.{entry}",

@@ -1,9 +1,8 @@
-"""RL signal control on Flow's traffic-light grid (Flow's grid0/grid1 benchmarks).
+"""RL signal control on Flow's traffic-light grid (Flow's ``flow.envs.traffic_light_grid``):
+the partially observed env and the grid0/grid1 benchmark env.
 
-Flow's ``flow.envs.traffic_light_grid``: one agent switches every light of a
-``TrafficLightGridNetwork``. Each light has two greens (vertical: Flow's ``GrGr``,
-horizontal: ``rGrG``); an action asks some lights to switch, which happens through
-``switch_time`` seconds of yellow (:class:`~flowrun.envs.signals.SwitchTimers`).
+Flow's module holds all four grid envs: the fully observed :class:`TrafficLightGridEnv` and
+its test variant are re-exported from :mod:`flowrun.envs.traffic_light_grid_base`.
 """
 
 from __future__ import annotations
@@ -11,308 +10,208 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import numpy as np
-from gymnasium.spaces import Box, Discrete, Tuple
+from gymnasium.spaces import Box
 
 from flowrun.core import rewards
-from flowrun.envs.base import Env
-from flowrun.envs.signals import (
-    SwitchRequests,
-    SwitchTimers,
-    discrete_mask,
-    edge_number,
-    phase_state,
+from flowrun.envs import rewards as formulas
+from flowrun.envs.signals import edge_number
+from flowrun.envs.traffic_light_grid_base import (
+    ADDITIONAL_ENV_PARAMS,
+    GreenWaveTestEnv,
+    TrafficLightGridEnv,
+    TrafficLightGridTestEnv,
+    reentry_edges,
 )
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
 
-ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
-    # seconds of yellow of a switch (Flow's "minimum switch time")
-    "switch_time": 2.0,
-    # "controlled": lights start vertical green and only RL switches them; "actuated":
-    # they run the network's programs until the agent first switches them
-    "tl_type": "controlled",
-    # Discrete(2**n) actions instead of Box(n)
-    "discrete": False,
-}
+__all__ = [
+    "ADDITIONAL_ENV_PARAMS",
+    "ADDITIONAL_PO_ENV_PARAMS",
+    "GreenWaveTestEnv",
+    "PO_TrafficLightGridEnv",
+    "TrafficLightGridBenchmarkEnv",
+    "TrafficLightGridEnv",
+    "TrafficLightGridPOEnv",
+    "TrafficLightGridTestEnv",
+    "reentry_edges",
+]
+
 ADDITIONAL_PO_ENV_PARAMS: dict[str, Any] = {
     # vehicles observed per incoming edge of each light
     "num_observed": 2,
     # desired speed of the benchmark's training reward, m/s
     "target_velocity": 30,
 }
-_VERTICAL = ("left", "right")
+#: Flow's vehicle length in the edge density, m.
+VEHICLE_LENGTH = 5.0
+#: Flow's upper bound of every observed value.
+OBS_HIGH = 3.0
 
 
-def reentry_edges(rows: int, cols: int) -> dict[str, str]:
-    """Flow's grid: each exit edge and the entry edge its cars re-enter on (the same row or
-    column, the same heading): eastbound ``bot{i}_{cols}`` -> ``bot{i}_0``, westbound
-    ``top{i}_0`` -> ``top{i}_{cols}``, southbound ``left0_{j}`` -> ``left{rows}_{j}``,
-    northbound ``right{rows}_{j}`` -> ``right0_{j}``."""
-    out = {f"bot{i}_{cols}": f"bot{i}_0" for i in range(rows)}
-    out |= {f"top{i}_0": f"top{i}_{cols}" for i in range(rows)}
-    out |= {f"left0_{j}": f"left{rows}_{j}" for j in range(cols)}
-    out |= {f"right{rows}_{j}": f"right0_{j}" for j in range(cols)}
-    return out
+class TrafficLightGridPOEnv(TrafficLightGridEnv):
+    """Flow's ``TrafficLightGridPOEnv``: each light sees the cars nearest to it.
 
-
-class TrafficLightGridEnv(Env):
-    """Flow's ``TrafficLightGridEnv``: all lights of the grid switched by one agent.
-
-    Observation: ``Tuple`` of four ``Box``es over the first ``N = initial vehicles`` cars
-    (kernel order, zero-padded): speed / max speed, distance to the junction ahead / the
-    longest edge length, Flow's edge number / (Flow's ``num_edges`` - 1); then the lights'
-    ``last_change`` (s), ``direction`` and ``currently_yellow`` (``3 * n_lights``).
-    Action: ``Box(-1, 1, (n_lights,))``, > 0 asks light ``center{i}`` to switch
-    (``Discrete(2**n)`` with ``discrete``). Reward: ``-delay - (number of actions >= 0.5)``
-    with Flow's ``min_delay_unscaled`` delay. Termination: collision; truncation: horizon.
-    As Flow's, a car that reaches an exit edge is taken out and put back at the start of
-    the entry edge of the same row or column, heading the same way (same id, type and lane,
-    position 0, the lane's maximum speed), so the number of cars stays constant. (Flow's
-    ``TrafficLightGridPOEnv`` and the benchmark env do not: their cars leave and inflows
-    bring new ones.)
+    Observation (``Box(0, 3)``, Flow's order): for each light (Flow's ``node_mapping``
+    order) and each of its 4 incoming edges, the ``num_observed`` cars nearest the junction
+    (zero-padded): their speeds / max speed, then distances to the junction / the longest
+    edge, then Flow's edge numbers / (``num_edges`` - 1) — ``3 * 4 * num_observed * n``
+    values; then per edge of the network ``5 m * cars / length`` and mean speed / max speed
+    (``2 * edges``); then ``last_change``, ``direction``, ``currently_yellow``
+    (``3 * n``). grid0 (3x3): 339 values; grid1 (5x5): 915.
+    Reward: ``-delay - 0.2 * (cars standing still)``; ``-delay`` when ``evaluate``.
     """
 
-    ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
-
-    @classmethod
-    def check_network(cls, network: Network) -> None:
-        """What this env needs of its network: at least one traffic light (``flowrun
-        validate`` / ``baseline`` / ``train`` call this before a run, to name the YAML line).
-
-        Raises:
-            ConfigError: the network has no light, at the key to change.
-        """
-        if any(n.type == "traffic_light" for n in network.spec.nodes):
-            return
-        name = network.network_type or type(network).__name__
-        head = f"{cls.__name__} switches traffic lights, but network '{name}' has none"
-        if network.net_params.additional_params.get("traffic_lights") is False:
-            raise ConfigError(
-                f"{head} (traffic_lights: false); set network.traffic_lights: true",
-                path="network.traffic_lights",
-            )
-        raise ConfigError(
-            f"{head}; use network type traffic_light_grid, or put lights on its junctions "
-            "under traffic_lights.lights",
-            path="network.type",
-        )
+    ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = {
+        **ADDITIONAL_ENV_PARAMS,
+        **ADDITIONAL_PO_ENV_PARAMS,
+    }
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        self.check_network(self.network)
-        spec = self.network.spec
-        self.light_ids = [n.id for n in spec.nodes if n.type == "traffic_light"]
-        p = self.env_params.additional_params
-        grid = self.net_params.additional_params.get("grid_array") or getattr(
-            self.network, "grid_array", {}
+        num = self.env_params.additional_params["num_observed"]
+        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+            raise ConfigError(
+                f"expected a whole number >= 1, got {num!r}",
+                path="env.additional_params.num_observed",
+            )
+        self.num_observed = int(num)
+        # there is one: check_network ran in the parent's __init__
+        self.node_mapping: list[tuple[str, list[str]]] = list(
+            getattr(self.network, "node_mapping", [])
         )
-        self.rows = int(spec.extra.get("rows", grid.get("row_num", 1)))
-        self.cols = int(spec.extra.get("cols", grid.get("col_num", len(self.light_ids))))
-        self.num_traffic_lights = len(self.light_ids)
-        self.tl_type = str(p["tl_type"])
-        self.discrete = bool(p.get("discrete", False))
-        self.min_switch_time = float(p["switch_time"])
-        self.timers = SwitchTimers(self.num_traffic_lights, self.min_switch_time, self.sim_step)
-        self.max_dist = max(e.length for e in spec.edges)
-        self.num_edges = int(getattr(self.network, "num_edges", len(spec.edges)))
-        self._vertical: list[list[bool]] = []
-        self._phase_states: list[list[str]] = []
-        self._acted = False
-        self._reentry = reentry_edges(self.rows, self.cols)
+        self.edge_list = [e.id for e in self.network.spec.edges]
+        self._edge_col = {e: i for i, e in enumerate(self.edge_list)}
+        self._col_names: list[str] | None = None  # the lane table _col_by_index was built for
+        self._col_by_index = np.zeros(0, dtype=np.int64)
+        self._slot_by_index = np.zeros(0, dtype=np.int64)
+        self._edge_len = np.array([e.length for e in self.network.spec.edges])
+        norm = max(self.num_edges - 1, 1)
+        self._edge_num = {e: edge_number(e, self.rows, self.cols) / norm for e in self.edge_list}
+        self.observed_ids: list[str] = []
+        # the observed edges in observation order (light by light), and for each network edge
+        # its place in that order (-1: not observed)
+        observed_edges = [edge for _, edges in self.node_mapping for edge in edges]
+        self._slot_of_col = np.full(len(self.edge_list) + 1, -1, dtype=np.int64)  # +1: none
+        for slot, edge in enumerate(observed_edges):
+            self._slot_of_col[self._edge_col[edge]] = slot
+        by_id = {e.id: e for e in self.network.spec.edges}
+        self._slot_length = np.array([by_id[e].length for e in observed_edges])
+        self._slot_num = np.array([self._edge_num[e] for e in observed_edges])
 
-    # Flow's attribute names
-    @property
-    def last_change(self) -> np.ndarray:
-        """Seconds since each light's last switch began (as Flow, a column vector)."""
-        return self.timers.last_change.reshape(-1, 1)
-
-    @property
-    def direction(self) -> np.ndarray:
-        """0 vertical green, 1 horizontal green, per light."""
-        return self.timers.direction.reshape(-1, 1)
-
-    @property
-    def currently_yellow(self) -> np.ndarray:
-        """1 while the light is yellow."""
-        return self.timers.currently_yellow.reshape(-1, 1)
-
-    @property
-    def action_space(self) -> Box | Discrete:  # type: ignore[override]
-        """One switch request per light."""
-        if self.discrete:
-            return Discrete(2**self.num_traffic_lights)
-        return Box(low=-1, high=1, shape=(self.num_traffic_lights,), dtype=np.float32)
-
-    @property
-    def observation_space(self) -> Tuple:  # type: ignore[override]
-        """Speeds, distances, edge numbers of ``N`` cars, and the lights' features."""
-        n = self.initial_vehicles.num_vehicles
-        high = max(1.0, self.min_switch_time + self.sim_step)
-        return Tuple((
-            Box(0.0, 1.0, (n,), np.float32),
-            Box(0.0, np.inf, (n,), np.float32),
-            Box(0.0, 1.0, (n,), np.float32),
-            Box(0.0, high, (3 * self.num_traffic_lights,), np.float32),
-        ))  # fmt: skip
-
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Any, dict[str, Any]]:
-        """New episode: timers cleared; ``controlled`` lights start vertical green."""
-        self.timers.reset()
-        obs, info = super().reset(seed=seed, options=options)
-        tk = self.k.traffic_light
-        self._vertical = [
-            [lane.split("_")[0].rstrip("0123456789").startswith(_VERTICAL) for lane in
-             tk.get_controlled_lanes(t)] for t in self.light_ids
-        ]  # fmt: skip
-        # each light's four states, at 2 * direction + yellow
-        self._phase_states = [
-            [phase_state(v, d, y) for d in (0, 1) for y in (False, True)] for v in self._vertical
-        ]
-        if self.tl_type != "actuated":
-            for i, light in enumerate(self.light_ids):
-                tk.set_state(light, self._phase_states[i][0])
-            obs = self._format_obs(self.get_state())
-        return obs, info
-
-    # ------------------------------------------------------------------ actions
-    def _switch_mask(self, rl_actions: Any) -> SwitchRequests:
-        if self.discrete:
-            return discrete_mask(int(np.asarray(rl_actions).reshape(-1)[0]),
-                                 self.num_traffic_lights)  # fmt: skip
-        return np.asarray(rl_actions, dtype=np.float64).reshape(-1) > 0.0
-
-    def _apply_rl_actions(self, rl_actions: Any) -> None:
-        self._update_lights(self._switch_mask(rl_actions))
-
-    def _update_lights(self, switch: SwitchRequests) -> None:
-        self._acted = True
-        set_state, ids, states = self.k.traffic_light.set_state, self.light_ids, self._phase_states
-        for i, direction, yellow in self.timers.step(switch):
-            set_state(ids[i], states[i][2 * direction + yellow])
-
-    def additional_command(self) -> None:
-        """Yellow timers run on steps without an action too; cars on exit edges re-enter."""
-        self._advance_timers()
-        self._reinsert_exiting()
-
-    def _advance_timers(self) -> None:
-        if not self._acted:
-            self._update_lights([False] * self.num_traffic_lights)
-        self._acted = False
-
-    def _reinsert_exiting(self) -> None:
-        """Flow's ``_reroute_if_final_edge`` for every car: one on an exit edge goes back to
-        the entry edge of its row or column (see the class docstring)."""
-        vk, reentry = self.k.vehicle, self._reentry
-        due = [(vid, reentry[e]) for vid, e in zip(vk.get_ids(), vk.edges, strict=True)
-               if e in reentry]  # fmt: skip
-        for veh_id, entry in due:
-            type_id, lane = vk.get_type(veh_id), vk.get_lane(veh_id)
-            vk.remove(veh_id)
-            vk.add(veh_id, type_id=type_id, edge=entry, pos="0", lane=str(lane), speed="max")
-
-    # ------------------------------------------------------------------ Flow's helpers
-    def get_distance_to_intersection(self, veh_ids: str | list[str]) -> Any:
-        """Distance (m) from a car (or each of a list) to the node its edge leads to, as
-        Flow's: edge length minus lane position; 0 on a junction's link (``center`` in the
-        edge id); -10 for a car not in the network."""
-        if isinstance(veh_ids, list):
-            return [self.get_distance_to_intersection(v) for v in veh_ids]
-        edge = self.k.vehicle.get_edge(veh_ids)
-        if edge == "":
-            return -10.0
-        if "center" in edge:
-            return 0.0
-        return self.k.network.edge_length(edge) - self.k.vehicle.get_position(veh_ids)
-
-    def get_closest_to_intersection(
-        self, edges: str | list[str], num_closest: int, padding: bool = False
-    ) -> list[str]:
-        """Ids of the ``num_closest`` cars nearest the end of each edge, nearest first (Flow's).
-
-        For a list of edges the per-edge lists are joined in order. ``padding`` fills an edge
-        with fewer cars up to ``num_closest`` with ``""`` (as Flow's code, only for one edge:
-        a list is joined unpadded).
+    @classmethod
+    def check_network(cls, network: Network) -> None:
+        """Lights (see the parent's), and a grid: each light's incoming edges.
 
         Raises:
-            ValueError: ``num_closest`` is not positive.
+            ConfigError: no light, or a network without ``node_mapping``.
         """
-        if num_closest <= 0:
-            raise ValueError(
-                f"get_closest_to_intersection: num_closest={num_closest}, expected a positive "
-                "number of cars per edge"
+        super().check_network(network)
+        if getattr(network, "node_mapping", None) is None:
+            raise ConfigError(
+                f"{cls.__name__} needs a grid network (its node_mapping of incoming edges "
+                f"per light), not '{network.network_type or type(network).__name__}'; use "
+                "network type traffic_light_grid",
+                path="network.type",
             )
-        if isinstance(edges, list):
-            return [v for e in edges for v in self.get_closest_to_intersection(e, num_closest)]
-        ids = sorted(self.k.vehicle.get_ids_by_edge(edges), key=self.get_distance_to_intersection)
-        pad = [""] * (num_closest - len(ids)) if padding else []
-        return ids[:num_closest] + pad
 
-    # ------------------------------------------------------------------ observations
-    def _car_columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Speed / max speed, distance to the junction / max_dist, edge number, per car."""
-        vk, net = self.k.vehicle, self.k.network
-        speeds = np.asarray(vk.speed, dtype=np.float64) / net.max_speed()
-        edges = list(vk.edges)
-        pos = np.asarray(vk.lane_pos, dtype=np.float64)
-        length = np.array([net.edge_length(e) if e and not e.startswith(":") else 0.0
-                           for e in edges])  # fmt: skip
-        dist = np.where(length > 0, length - pos, 0.0) / self.max_dist
-        nums = np.array([edge_number(e, self.rows, self.cols) for e in edges], dtype=np.float64)
-        return speeds, dist, nums / max(self.num_edges - 1, 1)
+    @property
+    def observation_space(self) -> Box:  # type: ignore[override]
+        """See the class docstring."""
+        size = (3 * 4 * self.num_observed * self.num_traffic_lights + 2 * len(self.edge_list)
+                + 3 * self.num_traffic_lights)  # fmt: skip
+        return Box(low=0.0, high=OBS_HIGH, shape=(size,), dtype=np.float32)
 
     def get_state(self) -> Any:
         """See the class docstring."""
-        n = self.initial_vehicles.num_vehicles
-        cols = self._car_columns()
-        parts = []
-        for col, high in zip(cols, (1.0, np.inf, 1.0), strict=True):
-            out = np.zeros(n, dtype=np.float32)
-            k = min(n, col.size)
-            out[:k] = np.clip(col[:k], 0.0, high)
-            parts.append(out)
-        space = self.observation_space.spaces[3]
-        assert isinstance(space, Box)
-        lights = np.clip(self.timers.features(), 0.0, space.high).astype(np.float32)
-        return (parts[0], parts[1], parts[2], lights)
+        vk = self.k.vehicle
+        max_speed = self.k.network.max_speed()
+        speeds = np.asarray(vk.speed, dtype=np.float64)
+        pos = np.asarray(vk.lane_pos, dtype=np.float64)
+        n_edges = len(self.edge_list)
+        # each car's edge column (n_edges: an internal or unknown edge, a bin of its own)
+        # and observed-edge slot (-1: none)
+        col, slot = self._edge_columns(vk, speeds.size)
+        # the num_observed cars nearest the junction on each observed edge, edge by edge
+        # (one stable sort of all cars: by slot, then nearest first; the cars on no observed
+        # edge, slot -1, come first and are cut off)
+        k = self.num_observed
+        order = np.lexsort((-pos, slot))
+        s = slot[order]
+        first = int(s.searchsorted(0))
+        order, s = order[first:], s[first:]
+        rank = np.arange(s.size) - s.searchsorted(s, side="left")
+        kept = (rank < k).nonzero()[0]
+        rows, s = order[kept], s[kept]
+        dest = s * k + rank[kept]
+        # one buffer, filled part by part in the observation's order
+        per_car = self._slot_length.size * k
+        at = 3 * per_car
+        obs = np.zeros(at + 2 * n_edges + self.timers.packed.size)
+        obs[:per_car][dest] = speeds[rows] / max_speed
+        obs[per_car:at][dest] = (self._slot_length[s] - pos[rows]) / self.max_dist
+        obs[2 * per_car : at][dest] = self._slot_num[s]
+        ids = vk.table.ids
+        self.observed_ids = [ids[r] for r in rows.tolist()]
+        counts = np.bincount(col, minlength=n_edges + 1)[:n_edges]
+        sums = np.bincount(col, weights=speeds, minlength=n_edges + 1)[:n_edges]
+        density = obs[at : at + n_edges]
+        np.divide(np.multiply(counts, VEHICLE_LENGTH, out=density), self._edge_len, out=density)
+        velocity = obs[at + n_edges : at + 2 * n_edges]
+        np.divide(sums, counts, out=velocity, where=counts > 0)
+        velocity /= max_speed
+        obs[at + 2 * n_edges :] = self.timers.packed
+        # clipped to [0, OBS_HIGH] (np.clip's value, without its Python-level wrapper)
+        np.minimum(np.maximum(obs, 0.0, out=obs), OBS_HIGH, out=obs)
+        return obs.astype(np.float32)
+
+    def _edge_columns(self, vk: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """Each car's network-edge column (the number of edges for a junction-internal or
+        unknown edge) and observed-edge slot (-1: none), by edge index."""
+        index = vk.edge_index
+        if index is None:
+            other = len(self.edge_list)
+            col = np.fromiter((self._edge_col.get(e, other) for e in vk.edges), np.int64, n)
+            return col, self._slot_of_col[col]
+        names = vk.edge_names
+        if self._col_names is not names:  # a new lane table (a new episode)
+            self._col_names = names
+            other = len(self.edge_list)
+            self._col_by_index = np.array([self._edge_col.get(e, other) for e in names], np.int64)
+            self._slot_by_index = self._slot_of_col[self._col_by_index]
+        return self._col_by_index[index], self._slot_by_index[index]
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
-        """``-delay - number of switch requests >= 0.5`` (Flow)."""
+        """``-delay - 0.2 * standing cars`` (``-delay`` when evaluating)."""
         delay = rewards.min_delay_unscaled(self)
-        if rl_actions is None:
+        if self.env_params.evaluate:
             return -delay
-        mask = self._switch_mask(rl_actions) if self.discrete else \
-            np.asarray(rl_actions, dtype=np.float64).reshape(-1) >= 0.5  # fmt: skip
-        penalty = rewards.boolean_action_penalty(mask, gain=1.0)
-        self.reward_terms = {"delay": -delay, "switch_penalty": -penalty}
-        return -delay - penalty
+        standstill = rewards.penalize_standstill(self, gain=0.2)
+        self.reward_terms = {"delay": -delay, "standstill": standstill}
+        return -delay + standstill
+
+    def additional_command(self) -> None:
+        """Yellow timers, and Flow's marking of the observed cars (no re-insertion: Flow's
+        PO env replaces its parent's command)."""
+        self._advance_timers()
+        self.k.vehicle.set_observed_many(self.observed_ids)
 
 
-class TrafficLightGridTestEnv(TrafficLightGridEnv):
-    """Flow's test variant: actions do nothing, reward 0."""
-
-    __test__ = False
-
-    def _apply_rl_actions(self, rl_actions: Any) -> None:
-        """Nothing."""
+class TrafficLightGridBenchmarkEnv(TrafficLightGridPOEnv):
+    """Flow's grid0/grid1 env: trains on the desired-velocity reward towards
+    ``target_velocity`` (0 after a collision), evaluates on ``-delay``."""
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
-        """0."""
-        return 0.0
+        """Desired velocity (``-delay`` when evaluating): Flow's ``rewards.desired_velocity``
+        on every car, its formula called on the kernel's speeds directly."""
+        if self.env_params.evaluate:
+            return -rewards.min_delay_unscaled(self)
+        speeds = self.k.vehicle.speed
+        if speeds.size and speeds.min() < -100:  # Flow's guard against SUMO's error value
+            return 0.0
+        target = float(self.env_params.additional_params["target_velocity"])
+        return formulas.desired_velocity(speeds, target, fail=bool(kwargs.get("fail", False)))
 
 
-#: Flow's older names (``flow.envs.green_wave_env``).
-GreenWaveTestEnv = TrafficLightGridTestEnv
-
-# Flow's module holds the partially observed variants too.
-from flowrun.envs.traffic_light_grid_po import (  # noqa: E402
-    PO_TrafficLightGridEnv as PO_TrafficLightGridEnv,
-)
-from flowrun.envs.traffic_light_grid_po import (  # noqa: E402
-    TrafficLightGridBenchmarkEnv as TrafficLightGridBenchmarkEnv,
-)
-from flowrun.envs.traffic_light_grid_po import (  # noqa: E402
-    TrafficLightGridPOEnv as TrafficLightGridPOEnv,
-)
+#: Flow's older name (``flow.envs.green_wave_env``).
+PO_TrafficLightGridEnv = TrafficLightGridPOEnv

@@ -13,7 +13,7 @@ import numpy as np
 from gymnasium.spaces import Box, Discrete
 
 from flowrun.core import rewards
-from flowrun.envs.traffic_light_grid_po import TrafficLightGridPOEnv
+from flowrun.envs.traffic_light_grid import TrafficLightGridPOEnv
 from flowrun.errors import ConfigError
 from flowrun.multiagent.base import MultiAgentEnv
 
