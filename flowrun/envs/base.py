@@ -29,6 +29,7 @@ from flowrun.controllers.drivers import FlowStyleDriver, GroupRouters, bind_per_
 from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.envs.frames import StepRecord, complete_frames, step_record
 from flowrun.envs.render import EnvPainter
+from flowrun.envs.spaces import ActionClipper
 from flowrun.envs.vehicles import (
     FlowControllers,
     GroupControl,
@@ -42,7 +43,6 @@ from flowrun.kernel.network import NetworkKernel
 from flowrun.kernel.sumo import gui_available
 from flowrun.kernel.vehicle import ring_fast_path
 from flowrun.networks.base import Network
-from flowrun.utils.spaces import ActionClipper
 
 log = logging.getLogger(__name__)
 #: luminance weights of R, G, B (ITU-R BT.601): the grey of Flow's gray/dgray render modes

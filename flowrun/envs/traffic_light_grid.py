@@ -12,7 +12,7 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium.spaces import Box
 
-from flowrun.core import rewards
+from flowrun.envs import flow_rewards as rewards
 from flowrun.envs import rewards as formulas
 from flowrun.envs.signals import edge_number
 from flowrun.envs.traffic_light_grid_base import (

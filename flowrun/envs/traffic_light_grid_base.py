@@ -14,7 +14,7 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium.spaces import Box, Discrete, Tuple
 
-from flowrun.core import rewards
+from flowrun.envs import flow_rewards as rewards
 from flowrun.envs.base import Env
 from flowrun.envs.signals import (
     SwitchRequests,

@@ -94,7 +94,7 @@ class Experiment:
         self.config: ExperimentConfig | None = None
         if isinstance(env, Mapping):
             from flowrun.config.flow_params import from_flow_params
-            from flowrun.utils.registry import make_flow_env
+            from flowrun.envs.flow_params import make_flow_env
 
             flow = from_flow_params(env)
             self.config = flow.config

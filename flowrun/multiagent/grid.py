@@ -12,7 +12,7 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium.spaces import Box, Discrete
 
-from flowrun.core import rewards
+from flowrun.envs import flow_rewards as rewards
 from flowrun.envs.traffic_light_grid import TrafficLightGridPOEnv
 from flowrun.errors import ConfigError
 from flowrun.multiagent.base import MultiAgentEnv
