@@ -14,6 +14,9 @@ Rows:
 - ``chunk writes``: what joining, CRC, zstd compression and writing of the finished chunks
   add per step (``add_message`` into a file with ``CHUNK_SIZE`` chunks, ``finish()`` included, minus
   the row above).
+- ``... with scene``: ``McapRecorder.write`` with the ``/flowrun/scene`` topic (Foxglove's
+  ``SceneUpdate``: the cars as cubes, the road once) on a circle road, and how much dearer a
+  recorded step is with it. The scene is on by default only if that stays within ~15 %.
 
 Each number is the median of ``--repeats`` runs (default 5); a 2-core machine under load
 moves them by ±30%.
@@ -32,7 +35,9 @@ from pathlib import Path
 
 from flowrun.recording import McapRecorder, StepStats, VehicleFrame, schema
 from flowrun.recording.mcap_file import CHUNK_SIZE, McapWriter
+from flowrun.recording.scene import SceneEncoder
 from flowrun.recording.synthetic import ring_frames
+from flowrun.render import ring_road
 
 Pairs = list[tuple[VehicleFrame, StepStats]]
 
@@ -41,10 +46,10 @@ def _median_us(run: Callable[[], float], repeats: int) -> float:
     return statistics.median(run() for _ in range(repeats))
 
 
-def recorder_us(pairs: Pairs, tmp: Path) -> float:
+def recorder_us(pairs: Pairs, tmp: Path, scene: SceneEncoder | None = None) -> float:
     """µs per step of ``McapRecorder.write`` over ``pairs``, ``close()`` included."""
     path = tmp / "bench.mcap"
-    with McapRecorder(path, metadata={"bench": "1"}, attachments={}) as rec:
+    with McapRecorder(path, metadata={"bench": "1"}, attachments={}, scene=scene) as rec:
         start = time.perf_counter()
         for frame, stats in pairs:
             rec.write(frame, stats)
@@ -94,10 +99,14 @@ def writer_us(pairs: Pairs, tmp: Path | None) -> float:
 
 def bench(num_vehicles: int, steps: int, repeats: int) -> dict[str, float]:
     """All rows for one ring size."""
-    pairs = list(ring_frames(num_vehicles, steps, ring_length=230.0 * num_vehicles / 22))
+    length = 230.0 * num_vehicles / 22
+    pairs = list(ring_frames(num_vehicles, steps, ring_length=length))
     encodes = [encode_us(pairs) for _ in range(repeats)]
     with tempfile.TemporaryDirectory() as tmp:
         total = _median_us(lambda: recorder_us(pairs, Path(tmp)), repeats)
+        with_scene = _median_us(
+            lambda: recorder_us(pairs, Path(tmp), SceneEncoder(ring_road(length))), repeats
+        )
         written = _median_us(lambda: writer_us(pairs, Path(tmp)), repeats)
     appended = _median_us(lambda: writer_us(pairs, None), repeats)
     return {
@@ -106,6 +115,8 @@ def bench(num_vehicles: int, steps: int, repeats: int) -> dict[str, float]:
         "encode_stats": statistics.median(e[1] for e in encodes),
         "add_message x2": appended,
         "chunk writes": written - appended,
+        "... with scene": with_scene,
+        "scene dearer by %": (with_scene / total - 1) * 100,
     }
 
 

@@ -109,6 +109,14 @@ def baseline(
     out: OutOpt = DEFAULT_OUT,
     no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
     record_every: Annotated[int, typer.Option("--record-every", help="Log every N-th step.")] = 1,
+    scene: Annotated[
+        bool,
+        typer.Option(
+            "--scene",
+            help="Also log the road and the cars as a foxglove.SceneUpdate topic "
+            "(/flowrun/scene) for Foxglove's 3D panel.",
+        ),
+    ] = False,
     render: Annotated[
         bool,
         typer.Option(
@@ -163,6 +171,7 @@ def baseline(
                     out=out,
                     record=not no_record,
                     record_every=record_every,
+                    scene=scene,
                     render=render,
                     argv=sys.argv,
                     progress=progress,

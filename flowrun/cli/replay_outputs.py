@@ -12,6 +12,8 @@ from rich.table import Table
 from flowrun.errors import FlowrunError, RecordingError
 from flowrun.recording import McapLog, McapRecorder
 from flowrun.recording.atomic import new_file
+from flowrun.recording.scene import SceneEncoder
+from flowrun.render import speed_top
 from flowrun.replay import (
     RouteLayout,
     SpeedSeries,
@@ -23,6 +25,7 @@ from flowrun.replay import (
     time_space_points,
     traffic_series,
 )
+from flowrun.replay.html import log_road
 from flowrun.replay.plots import plot_stride
 from flowrun.replay.signal_plots import plot_signals
 from flowrun.replay.signals import intersection_rows, signal_series
@@ -42,13 +45,16 @@ class PlotKind(StrEnum):
 def export_foxglove(
     log: McapLog, out: Path, start: float | None, end: float | None, vehicles: list[str] | None
 ) -> int:
-    """Copy the selected steps/vehicles into a new log (opens in Foxglove like any flowrun log)."""
+    """Copy the selected steps/vehicles into a new log (opens in Foxglove like any flowrun log),
+    with the ``/flowrun/scene`` topic for Foxglove's 3D panel."""
     stats = {s.step: s for s in log.stats(start, end)}
     signals = {s.step: s for s in log.signals(start, end)}
+    top = speed_top(max((s.max_speed for s in stats.values() if s.num_vehicles), default=0.0))
+    scene = SceneEncoder(log_road(log)[0], top=top)
     written = 0
     with (
         new_file(out, "--foxglove") as tmp,
-        McapRecorder(tmp, metadata=log.metadata, attachments=log.attachments) as rec,
+        McapRecorder(tmp, metadata=log.metadata, attachments=log.attachments, scene=scene) as rec,
     ):
         for frame in log.frames(start, end, vehicles):
             if frame.step in stats:

@@ -21,6 +21,7 @@ from flowrun.experiment.metrics import RunMetrics
 from flowrun.experiment.runner import Experiment, FrameSink
 from flowrun.experiment.signal_baselines import SignalMetrics, SignalRun
 from flowrun.fastring.plan import refuse_numpy_backend
+from flowrun.recording.scene import SceneEncoder
 from flowrun.recording.writer import McapRecorder
 from flowrun.render import Animation, Road, Snapshot, draw_run, write_animation
 from flowrun.rundir.folders import (
@@ -97,6 +98,7 @@ def open_run_log(
     run: int,
     record_every: int = 1,
     extra: dict[str, str] | None = None,
+    scene: bool = False,
 ) -> McapRecorder:
     """The MCAP log of one run: metadata (with the network's main road and edge starts), the
     config and the network as attachments.
@@ -111,7 +113,10 @@ def open_run_log(
         **network_metadata(env.k),
         **(extra or {}),
     }
-    return McapRecorder(path, metadata=meta, attachments=attachments, record_every=record_every)
+    encoder = SceneEncoder(kernel_road(env.k), vehicle_lengths(env.k)) if scene else None
+    return McapRecorder(
+        path, metadata=meta, attachments=attachments, record_every=record_every, scene=encoder
+    )
 
 
 def run_baseline(
@@ -123,6 +128,7 @@ def run_baseline(
     record: bool = True,
     record_every: int = 1,
     render: bool = False,
+    scene: bool = False,
     argv: list[str] | None = None,
     progress: Callable[[int, int], None] | None = None,
     folder: Path | None = None,
@@ -157,7 +163,8 @@ def run_baseline(
     check_out_dir(folder.parent if folder is not None else out)
     run_dir = start_run(out, cfg, seed, argv, folder)
     with tracked_run(run_dir):
-        return _run(cfg, run_dir, runs, n_steps, seed, record, record_every, render, progress)
+        return _run(cfg, run_dir, runs, n_steps, seed, record, record_every, render, progress,
+                    scene)  # fmt: skip
     raise AssertionError("unreachable")  # pragma: no cover - tracked_run re-raises
 
 
@@ -171,6 +178,7 @@ def _run(
     record_every: int,
     render: bool,
     progress: Callable[[int, int], None] | None,
+    scene: bool = False,
 ) -> BaselineResult:
     try:
         env = make_env(cfg, render_mode="rgb_array" if render else None, work_dir=run_dir / "sumo")
@@ -190,7 +198,7 @@ def _run(
     def sink(run: int) -> FrameSink:
         path = run_dir / f"run_{run}.mcap"
         logs.append(path)
-        return open_run_log(path, env, cfg, seed + run, run, record_every)
+        return open_run_log(path, env, cfg, seed + run, run, record_every, scene=scene)
 
     def on_step(run: int, step: int) -> None:
         if film is not None and run == 0 and step % GIF_EVERY == 0:

@@ -16,6 +16,8 @@ from flowrun.errors import RecordingError
 from flowrun.recording import schema
 from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
 from flowrun.recording.mcap_file import CHUNK_SIZE, McapWriter
+from flowrun.recording.scene import SCENE_TOPIC, SCENE_TYPE, SceneEncoder
+from flowrun.recording.scene import schema_data as scene_schema_data
 from flowrun.recording.signals import SignalEncoder
 
 log = logging.getLogger(__name__)
@@ -72,6 +74,8 @@ class McapRecorder:
             logged step's, so their sums over a log stay exact.
         flush_every_s: wall-clock seconds between forced chunk flushes (crash safety).
         chunk_size: uncompressed bytes after which a chunk is closed anyway.
+        scene: when given, every logged step also gets a ``foxglove.SceneUpdate`` on
+            ``/flowrun/scene`` (the road, the cars, the lights: Foxglove's 3D panel).
     """
 
     def __init__(
@@ -83,6 +87,7 @@ class McapRecorder:
         record_every: int = 1,
         flush_every_s: float = 2.0,
         chunk_size: int = CHUNK_SIZE,
+        scene: SceneEncoder | None = None,
     ) -> None:
         if record_every < 1:
             raise RecordingError(f"record_every must be >= 1, got {record_every}")
@@ -129,6 +134,14 @@ class McapRecorder:
             self._stats = self._writer.register_channel(
                 schema.STATS_TOPIC, schema.ENCODING, stats_schema
             )
+            self._scene = scene
+            if scene is not None:
+                scene_schema = self._writer.register_schema(
+                    SCENE_TYPE, schema.ENCODING, scene_schema_data()
+                )
+                self._scene_channel = self._writer.register_channel(
+                    SCENE_TOPIC, schema.ENCODING, scene_schema
+                )
         except BaseException:
             self._stream.close()
             raise
@@ -188,6 +201,8 @@ class McapRecorder:
         add(self._vehicles, stamp, self._encoder.encode(frame, self._roster_version), stamp, seq)
         if signals is not None:
             add(self._signal_channel(), stamp, self._signal_encoder.encode(signals), stamp, seq)
+        if self._scene is not None:
+            add(self._scene_channel, stamp, self._scene.encode(frame, signals, stamp), stamp, seq)
         self.frames_written += 1
         now = time.monotonic()
         if now - self._last_flush >= self.flush_every_s or self.frames_written == 1:
