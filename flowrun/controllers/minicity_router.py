@@ -201,6 +201,29 @@ class MinicityRouter(Router):
         self._forced[[i for e, i in lanes.edge_pos.items() if e in self.FORCED]] = True
         self._plan = {}
 
+    def _kept_route(
+        self, veh_id: str, edge: str, lane_no: int, at_end: bool, at_trigger: bool
+    ) -> tuple[tuple[str, ...], str] | None:
+        """The part of a due car's route it keeps (from ``edge`` on) and the lane that part
+        ends on, or ``None`` when the car needs no new route after all (already on Flow's
+        fixed way on, or unable to take it before its route's end)."""
+        lane = f"{edge}_{lane_no}"
+        route: tuple[str, ...] = (edge,)
+        end_lane = lane
+        given = self._plan.get(veh_id)
+        if given is not None and edge in given[0]:
+            at = len(given[0]) - 1 - given[0][::-1].index(edge)
+            route, end_lane = given[0][at:], given[1]
+        forced = self.FORCED.get(edge, ())
+        if forced and route[1 : 1 + len(forced)] != forced:
+            reached = follow_edges(lane, forced, self._successors)
+            if reached is not None:
+                return (edge, *forced), reached
+            return (route, end_lane) if at_end else None
+        if not at_end and not at_trigger:
+            return None  # already on Flow's fixed way on
+        return route, end_lane
+
     def route_vehicles(
         self, vk: Any, lanes: Any, rows: np.ndarray, rng: np.random.Generator
     ) -> tuple[list[int], list[list[str]]]:
@@ -236,22 +259,11 @@ class MinicityRouter(Router):
         due_rows, kept, starts, base, least = [], [], [], [], []
         for j, lane_no in zip(todo.tolist(), lane_index, strict=True):
             row, edge = row_list[j], names[int(edge_index[j])]
-            vid, lane = ids[row], f"{edge}_{lane_no}"
-            route: tuple[str, ...] = (edge,)
-            end_lane = lane
-            given = plan.get(vid)
-            if given is not None and edge in given[0]:
-                at = len(given[0]) - 1 - given[0][::-1].index(edge)
-                route, end_lane = given[0][at:], given[1]
-            forced = self.FORCED.get(edge, ())
-            if forced and route[1 : 1 + len(forced)] != forced:
-                reached = follow_edges(lane, forced, self._successors)
-                if reached is not None:
-                    route, end_lane = (edge, *forced), reached
-                elif edge_index[j] != route_end[j]:
-                    continue
-            elif edge_index[j] != route_end[j] and edge_index[j] != trigger[j]:
-                continue  # already on Flow's fixed way on
+            at_end, at_trigger = edge_index[j] == route_end[j], edge_index[j] == trigger[j]
+            kept_route = self._kept_route(ids[row], edge, lane_no, at_end, at_trigger)
+            if kept_route is None:
+                continue
+            route, end_lane = kept_route
             due_rows.append(row)
             kept.append(route)
             starts.append(end_lane)
