@@ -32,6 +32,7 @@ run: $(CORE_STAMP)
 test: $(FULL_STAMP)
 	$(BIN)/ruff check flowrun tests bench examples
 	$(BIN)/mypy
+	$(BIN)/lint-imports
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
 	$(BIN)/python -m pytest -q --durations=15
 
@@ -39,4 +40,4 @@ bench: $(FULL_STAMP)
 	$(BIN)/python bench/ring.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache site
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache .grimp_cache .import_linter_cache site

@@ -62,7 +62,7 @@ def ring_x(env: Env, veh_id: str) -> float:
 
 
 def test_every_builtin_env_is_registered_with_gymnasium():
-    from flowrun.multiagent.names import MULTIAGENT_ENVS  # PettingZoo envs: not Gymnasium's
+    from flowrun.envs.registry import MULTIAGENT_ENVS  # PettingZoo envs: not Gymnasium's
 
     assert env_names() == sorted([*BUILTIN, *MULTIAGENT_ENVS])
     for name in BUILTIN:

@@ -14,10 +14,9 @@ from typer.testing import CliRunner
 from flowrun.cli.commands_config import register
 from flowrun.config.inflows import InFlow, InFlows
 from flowrun.config.params import ControllerSpec, VehicleParams
-from flowrun.envs.registry import env_names, register_envs, resolve_env_class
+from flowrun.envs.registry import MULTIAGENT_ENVS, env_names, register_envs, resolve_env_class
 from flowrun.errors import ConfigError
 from flowrun.multiagent.agents import max_departures, possible_agent_ids
-from flowrun.multiagent.names import MULTIAGENT_ENVS
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 

@@ -28,6 +28,7 @@ from flowrun.config.params import (
     VehicleParams,
 )
 from flowrun.envs.bottleneck import ADDITIONAL_RL_ENV_PARAMS, BottleneckDesiredVelocityEnv
+from flowrun.envs.factory import make_registered
 
 #: Flow's merge0: inflow on the highway (veh/h), share of AVs in it, inflow on the ramp (veh/h)
 MERGE_FLOW_RATE, MERGE_RL_PENETRATION, MERGE_RAMP_RATE = 2000, 0.1, 100
@@ -234,10 +235,9 @@ DEFAULT_CONFIGS: dict[str, Callable[[], ExperimentConfig]] = {
 def make_with_default(
     env_name: str, config: str | Path | ExperimentConfig | None = None, **kwargs: Any
 ) -> Any:
-    """Gymnasium entry point of the envs in :data:`DEFAULT_CONFIGS`: their own default
-    experiment when no ``config`` is given, else as ``flowrun.envs.factory.make_registered``."""
-    from flowrun.envs.factory import make_registered
-
-    if config is None:
+    """Gymnasium entry point of every built-in env: its own default experiment
+    (:data:`DEFAULT_CONFIGS`; the ring for the others) when no ``config`` is given, else as
+    :func:`flowrun.envs.factory.make_registered`."""
+    if config is None and env_name in DEFAULT_CONFIGS:
         config = DEFAULT_CONFIGS[env_name]()
     return make_registered(env_name, config=config, **kwargs)

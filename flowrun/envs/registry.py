@@ -1,4 +1,9 @@
-"""Environment classes by name, user classes by import path, and Gymnasium registration."""
+"""Environment classes by name, user classes by import path, and Gymnasium registration.
+
+The multi-agent envs (:mod:`flowrun.multiagent`, PettingZoo ``ParallelEnv``s above this layer)
+are listed here by name and import path and imported only when a config names one, so
+flowrun's core installs and imports without PettingZoo.
+"""
 
 from __future__ import annotations
 
@@ -12,6 +17,18 @@ import gymnasium
 from flowrun.errors import ConfigError
 from flowrun.import_path import import_near
 from flowrun.suggest import did_you_mean, unknown_name
+
+#: ``env.class`` name -> ``module:Class`` of each multi-agent environment.
+MULTIAGENT_ENVS: dict[str, str] = {
+    "MultiAgentWaveAttenuationPOEnv": "flowrun.multiagent.ring:MultiAgentWaveAttenuationPOEnv",
+    "MultiAgentAccelPOEnv": "flowrun.multiagent.ring:MultiAgentAccelPOEnv",
+    "MultiAgentMergePOEnv": "flowrun.multiagent.merge:MultiAgentMergePOEnv",
+    "MultiAgentHighwayPOEnv": "flowrun.multiagent.highway:MultiAgentHighwayPOEnv",
+    "MultiTrafficLightGridPOEnv": "flowrun.multiagent.grid:MultiTrafficLightGridPOEnv",
+}
+
+#: The command that installs what the multi-agent environments need.
+INSTALL_HINT = "pip install 'flowrun[multiagent]'  (or: pip install pettingzoo==1.27.0)"
 
 
 def _builtin() -> dict[str, type]:
@@ -54,15 +71,11 @@ def _builtin() -> dict[str, type]:
 
 def env_names() -> list[str]:
     """Names a config may use as ``env.class`` (the multi-agent ones need PettingZoo)."""
-    from flowrun.multiagent.names import MULTIAGENT_ENVS
-
     return sorted([*_builtin(), *MULTIAGENT_ENVS])
 
 
 def _multiagent_class(name: str) -> type | None:
     """A multi-agent env class by name (``None`` for other names), imported on demand."""
-    from flowrun.multiagent.names import INSTALL_HINT, MULTIAGENT_ENVS
-
     path = MULTIAGENT_ENVS.get(name)
     if path is None:
         return None
@@ -141,21 +154,16 @@ def _env_class(module: ModuleType, module_name: str, attr: str, name: str) -> ty
 def register_envs() -> None:
     """Register every built-in env as ``flowrun/<Name>-v0`` with Gymnasium (idempotent).
 
-    Without a ``config`` an env runs its default experiment (:mod:`flowrun.envs.defaults`):
-    Flow's merge0 for ``MergePOEnv``, bottleneck0 for the bottleneck envs, grid0 for the
-    grid envs, the ring for the others.
+    Without a ``config`` an env runs its default experiment
+    (:func:`flowrun.envs.defaults.make_with_default`).
     """
-    from flowrun.envs.defaults import DEFAULT_CONFIGS
-
     for name in sorted(_builtin()):  # the multi-agent envs are PettingZoo envs, not Gymnasium's
         env_id = f"flowrun/{name}-v0"
         if env_id in gymnasium.registry:
             continue
-        own_default = name in DEFAULT_CONFIGS
-        entry = "defaults:make_with_default" if own_default else "factory:make_registered"
         gymnasium.register(
             id=env_id,
-            entry_point=f"flowrun.envs.{entry}",
+            entry_point="flowrun.envs.defaults:make_with_default",
             kwargs={"env_name": name},
             disable_env_checker=True,
         )

@@ -10,7 +10,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from flowrun.multiagent.names import INSTALL_HINT, MULTIAGENT_ENVS
+from flowrun.envs.registry import INSTALL_HINT, MULTIAGENT_ENVS
 
 __all__ = [
     "INSTALL_HINT",
