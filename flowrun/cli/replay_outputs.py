@@ -26,7 +26,7 @@ from flowrun.replay import (
     traffic_series,
 )
 from flowrun.replay.html import log_road
-from flowrun.replay.plots import plot_stride
+from flowrun.replay.plots import plot_stride, shared_speed_range, shared_traffic_limits
 from flowrun.replay.signal_plots import plot_signals
 from flowrun.replay.signals import intersection_rows, signal_series
 from flowrun.rundir.folders import unique_dir
@@ -109,25 +109,43 @@ def draw_plots(
     folder: Path,
     written: list[Path],
 ) -> None:
-    """Draw what ``--plot`` asks into ``folder``, adding each PNG to ``written`` once whole."""
+    """Draw what ``--plot`` asks into ``folder``, adding each PNG to ``written`` once whole.
+    Two runs compared share their colour scales and y-ranges."""
     suffixes = [""] if len(opened) == 1 else ["_A", "_B"]
+    runs = list(zip(opened, layouts, suffixes, series, strict=True))
     if plot in (PlotKind.speed, PlotKind.all):
-        written.append(plot_speeds(opened, folder / "speeds.png", series=series))
-    for lg, layout, suffix in zip(opened, layouts, suffixes, strict=True):
-        if plot in (PlotKind.time_space, PlotKind.all):
-            data = time_space_points(
-                lg, start_s=start, end_s=end, vehicles=chosen, every=plot_stride(lg), route=layout
-            )
+        written.append(plot_speeds(opened, folder / "speeds.png", series=series, vehicles=chosen))
+    if plot in (PlotKind.time_space, PlotKind.all):
+        datas = [
+            time_space_points(lg, start_s=start, end_s=end, vehicles=chosen,
+                              every=plot_stride(lg), route=layout)
+            for lg, layout, _, _ in runs
+        ]  # fmt: skip
+        colours = shared_speed_range(datas)
+        for (lg, layout, suffix, _), data in zip(runs, datas, strict=True):
             png = folder / f"time_space{suffix}.png"
-            written.append(plot_time_space(lg, png, data=data, route=layout))
-            if plot is PlotKind.all:
+            written.append(plot_time_space(lg, png, data=data, route=layout, speed_range=colours))
+        if plot is PlotKind.all:  # every car, on the route shown or not
+            cars = [
+                data if layout is None else time_space_points(
+                    lg, start_s=start, end_s=end, vehicles=chosen, every=plot_stride(lg))
+                for (lg, layout, _, _), data in zip(runs, datas, strict=True)
+            ]  # fmt: skip
+            ylim = (0.0, shared_speed_range(cars)[1] * 1.05)
+            for (lg, _, suffix, s), data in zip(runs, cars, strict=True):
                 png = folder / f"vehicle_speeds{suffix}.png"
-                written.append(plot_vehicle_speeds(lg, png, data=data))
-    for lg, layout, suffix in zip(opened, layouts, suffixes, strict=True):
-        if plot in (PlotKind.traffic, PlotKind.all):
-            traffic = traffic_series(lg, layout, start_s=start, end_s=end)
-            flow = outflow(list(lg.stats(start, end)))
-            written.append(plot_traffic(lg, folder / f"traffic{suffix}.png", traffic, flow))
+                total = len(s.vehicle_types)
+                written.append(plot_vehicle_speeds(lg, png, data=data, total=total, ylim=ylim))
+    if plot in (PlotKind.traffic, PlotKind.all):
+        pairs = [
+            (traffic_series(lg, layout, start_s=start, end_s=end),
+             outflow(list(lg.stats(start, end))))
+            for lg, layout, _, _ in runs
+        ]  # fmt: skip
+        limits = shared_traffic_limits(pairs) if len(pairs) > 1 else None
+        for (lg, _, suffix, _), (traffic, flow) in zip(runs, pairs, strict=True):
+            png = folder / f"traffic{suffix}.png"
+            written.append(plot_traffic(lg, png, traffic, flow, ylims=limits))
     for lg, suffix in zip(opened, suffixes, strict=True):
         if plot in (PlotKind.signals, PlotKind.all) and lg.has_signals:
             lights = signal_series(lg, start_s=start, end_s=end)

@@ -93,6 +93,15 @@ def write_results(
     return json_path, md_path, plot_results(plan, rows)
 
 
+def plot_title(plan: BenchmarkPlan) -> str:
+    """The benchmark plot's title: seeds, and every ``--set`` the runs had (a shortened
+    ``env.horizon`` changes what the numbers mean)."""
+    title = f"flowrun benchmark: {len(plan.seeds)} seed(s)"
+    if plan.sets:
+        title += "\n--set " + " --set ".join(plan.sets)
+    return title
+
+
 def plot_results(plan: BenchmarkPlan, rows: Sequence[dict[str, Any]]) -> Path | None:
     """``benchmark.png``: one panel per family; bars for the baseline (and policy) with their
     std over seeds, a black tick at Flow's reference. ``None`` when nothing has a value."""
@@ -124,10 +133,16 @@ def plot_results(plan: BenchmarkPlan, rows: Sequence[dict[str, Any]]) -> Path | 
         ax.set_xticks(xs, [r["benchmark"] for r in mine], rotation=30, fontsize="small")
         ax.set_ylabel(f"{mine[0]['metric']} ({mine[0]['unit']})")
         ax.grid(axis="y", alpha=0.3)
-        if i == 0:
-            ax.legend(fontsize="small")
-    fig.suptitle(f"flowrun benchmark: {len(plan.seeds)} seed(s)")
-    fig.tight_layout()
+    # one legend for all panels, beside the title: inside a panel it covered the reference ticks
+    handles, labels = fig.axes[0].get_legend_handles_labels()
+    for other in fig.axes[1:]:
+        for h, label in zip(*other.get_legend_handles_labels(), strict=True):
+            if label not in labels:
+                handles.append(h)
+                labels.append(label)
+    fig.legend(handles, labels, loc="upper right", fontsize="small", ncols=len(labels))
+    fig.suptitle(plot_title(plan), x=0.01, ha="left", fontsize="medium")
+    fig.tight_layout(rect=(0, 0, 1, 0.9))
     path = plan.folder / "benchmark.png"
     fig.savefig(path, dpi=100)
     return path

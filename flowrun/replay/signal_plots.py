@@ -30,38 +30,43 @@ def _runs(values: np.ndarray) -> list[tuple[int, int, int]]:
 
 
 def _light_panel(ax: object, light: LightSeries, time: np.ndarray, dt: np.ndarray) -> None:
-    """Queue lines above zero; one band per approach below zero, coloured by its signal."""
+    """Queue lines from zero up; one band per approach in a strip at the top of the panel
+    (above every queue value, never on negative queue values), coloured by its signal."""
     top = max(int(light.queue.max()) if light.queue.size else 0, 1)
-    band = top * 0.12
+    n = max(len(light.approaches), 1)
+    strip = min(0.3, 0.07 * n)  # fraction of the panel's height the bands take
+    band = strip / n
     span_end = time + np.roll(dt, -1) if time.size > 1 else time + dt
     if time.size > 1:
         span_end[-1] = time[-1] + dt[-1]
+    bands = ax.get_xaxis_transform()  # type: ignore[attr-defined]  # x: data, y: panel fraction
     for j, approach in enumerate(light.approaches):
         colour = _LINE_COLOURS[j % len(_LINE_COLOURS)]
         ax.step(time, light.queue[:, j], where="post", color=colour,  # type: ignore[attr-defined]
                 linewidth=1.1, label=approach.edge)  # fmt: skip
-        low = -(j + 1) * band
+        low = 1.0 - (j + 1) * band
         bars: dict[int, list[tuple[float, float]]] = {}
         for a, b, value in _runs(light.signal[:, j]):
             if value in _SIGNAL_COLOURS:
                 bars.setdefault(value, []).append((time[a], span_end[b - 1] - time[a]))
         for value, spans in bars.items():
-            ax.broken_barh(spans, (low, band * 0.85),  # type: ignore[attr-defined]
+            ax.broken_barh(spans, (low, band * 0.85), transform=bands,  # type: ignore[attr-defined]
                            facecolors=_SIGNAL_COLOURS[value], alpha=0.7)  # fmt: skip
         ax.plot(time[:1], [low + band / 2], marker="s", color=colour,  # type: ignore[attr-defined]
-                markersize=4, linestyle="")  # fmt: skip
-    ax.set_ylim(-(len(light.approaches) + 0.2) * band, top * 1.1)  # type: ignore[attr-defined]
-    ax.axhline(0, color="black", linewidth=0.5)  # type: ignore[attr-defined]
+                markersize=4, linestyle="", transform=bands)  # fmt: skip
+    # queues fill the panel below the strip; the axis has no ticks beyond the largest queue
+    ax.set_ylim(0.0, top * 1.05 / (1.0 - strip))  # type: ignore[attr-defined]
+    ax.set_yticks([t for t in ax.get_yticks() if 0 <= t <= top * 1.05])  # type: ignore[attr-defined]
     ax.set_title(f"{light.light}: mean queue {light.mean_queue:.2f} veh, delay "  # type: ignore[attr-defined]
                  f"{light.mean_delay:.1f} s/veh", fontsize="small")  # fmt: skip
-    ax.legend(loc="upper left", fontsize="x-small", ncols=2)  # type: ignore[attr-defined]
+    ax.legend(loc="center left", fontsize="x-small", ncols=2)  # type: ignore[attr-defined]
     ax.grid(alpha=0.3)  # type: ignore[attr-defined]
 
 
 def plot_signals(log: McapLog, out_png: str | os.PathLike[str], series: SignalSeries) -> Path:
     """One panel per traffic light: queued cars (speed < 0.1 m/s) per incoming approach over
-    time; below the axis one band per approach (same order as the legend), green / yellow /
-    red as that approach's signal showed."""
+    time; in a strip at the top of the panel one band per approach (same order as the
+    legend), green / yellow / red as that approach's signal showed."""
     n = max(len(series.lights), 1)
     cols = math.ceil(math.sqrt(n))
     rows = math.ceil(n / cols)
@@ -76,8 +81,8 @@ def plot_signals(log: McapLog, out_png: str | os.PathLike[str], series: SignalSe
     for ax in axes[::cols]:
         ax.set_ylabel("Queue [veh]")
     fig.suptitle(
-        f"Queues per approach and their signals - {run_label(log)}\n(bands below zero: each "
-        "approach's signal, in legend order; green / yellow / red)",
+        f"Queues per approach and their signals - {run_label(log)}\n(bands at the top of each "
+        "panel: each approach's signal, in legend order; green / yellow / red)",
         fontsize="medium",
     )
     return _save(fig, out_png)
