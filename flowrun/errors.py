@@ -6,6 +6,8 @@ Every message says what was expected, what was found, and how to fix it. The CLI
 
 from __future__ import annotations
 
+import warnings
+
 
 class FlowrunError(Exception):
     """Base class of all errors flowrun reports to users."""
@@ -76,3 +78,18 @@ class RecordingError(FlowrunError):
 
 class TrainingError(FlowrunError):
     """Training or evaluation cannot proceed (missing extra, bad run directory, ...)."""
+
+
+def deprecation_warning(obj: object, dep_from: str, dep_to: str) -> None:
+    """Warn that an attribute of ``obj`` was renamed (Flow's message, as a ``UserWarning``).
+
+    Args:
+        obj: the object whose attribute was used under its old name.
+        dep_from: the old attribute name.
+        dep_to: the name to use instead.
+    """
+    warnings.warn(
+        f"The attribute {dep_from} in {type(obj).__name__} is deprecated, use {dep_to} instead.",
+        UserWarning,
+        stacklevel=2,
+    )

@@ -1,5 +1,5 @@
-"""Flow's ``flow.visualize`` import path: plots from flowrun's MCAP logs.
+"""Flow compatibility: re-exports. Flow's ``flow.visualize`` path.
 
-``flowrun.visualize.time_space_diagram`` is the module (as in Flow); its function
-:func:`~flowrun.visualize.time_space_diagram.time_space_diagram` draws the plot.
+``flowrun.visualize.time_space_diagram`` is the module (as in Flow); the plot is drawn by
+:mod:`flowrun.replay.time_space_diagram` from flowrun's MCAP logs.
 """

@@ -1,6 +1,8 @@
-"""Flow's ``flow.core.kernel``: :class:`~flowrun.core.kernel.kernel.Kernel`, Flow's manual
-kernel lifecycle over flowrun's kernel."""
+"""Flow compatibility: re-exports. Flow's ``flow.core.kernel`` path.
 
-from flowrun.core.kernel.kernel import Kernel
+``Kernel`` (Flow's manual kernel lifecycle) lives in :mod:`flowrun.kernel.flow_lifecycle`.
+"""
+
+from flowrun.kernel.flow_lifecycle import Kernel
 
 __all__ = ["Kernel"]
