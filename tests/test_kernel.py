@@ -12,7 +12,7 @@ import pytest
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError
 from flowrun.experiment.runner import Experiment
-from flowrun.kernel.snapshot import RingFollowing, leaders_on_ring
+from flowrun.kernel.following import RingFollowing, leaders_on_ring
 from flowrun.recording.reader import open_log
 from flowrun.recording.writer import McapRecorder
 

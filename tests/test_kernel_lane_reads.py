@@ -20,14 +20,14 @@ CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 
 def count_lane_reads(env: Any) -> list[int]:
     """Wrap the kernel's lane-id getter; the returned list's one entry counts its calls."""
-    vk = env.k.vehicle
-    get, calls = vk._fast.get_lane_id, [0]
+    reader = env.k.vehicle.reader
+    get, calls = reader.fast.get_lane_id, [0]
 
     def counted(vid: str) -> str:
         calls[0] += 1
         return str(get(vid))
 
-    vk._fast = replace(vk._fast, get_lane_id=counted)
+    reader.fast = replace(reader.fast, get_lane_id=counted)
     return calls
 
 
@@ -77,7 +77,7 @@ def test_multi_lane_cars_are_always_read() -> None:
     env = make_env(cfg)
     try:
         env.reset(seed=0)
-        multi = env.k.vehicle._lanes.alone  # per lane key, plus False at the end
+        multi = env.k.vehicle.lane_table.alone  # per lane key, plus False at the end
         assert not multi[:-1].all()  # some edges have several lanes
         compared, reads = check_lanes(env, 150, lambda _: None)
     finally:

@@ -40,8 +40,8 @@ from flowrun.errors import ConfigError, MissingParameterError
 from flowrun.kernel import Kernel
 from flowrun.kernel.geometry import RingPlacement
 from flowrun.kernel.network import NetworkKernel
+from flowrun.kernel.ring_reader import ring_fast_path
 from flowrun.kernel.sumo import gui_available
-from flowrun.kernel.vehicle import ring_fast_path
 from flowrun.networks.base import Network
 
 log = logging.getLogger(__name__)

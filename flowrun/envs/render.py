@@ -41,7 +41,7 @@ def _map_xy(k: Kernel) -> tuple[np.ndarray, np.ndarray]:
     vk = k.vehicle
     if vk.read_xy:
         return vk.x, vk.y
-    if vk.ring_path:
+    if vk.lane_table is None:  # a closed ring: positions map onto its lane shapes
         return vk.placement().xy(np.asarray(vk.position), np.asarray(vk.lanes))
     pts = np.array([vk.get_2d_position(v) for v in vk.get_ids()], dtype=np.float64)
     pts = pts.reshape(-1, 2)

@@ -123,7 +123,7 @@ def ring_order(
     headway is then ``u[leader] - u + offset`` for unwrapped positions ``u`` (start + distance
     driven), with ``offset`` = one ring length for the car whose leader is ahead across the
     start, minus the leader's length — as flowrun's SUMO kernel computes it
-    (:class:`~flowrun.kernel.snapshot.RingFollowing`).
+    (:class:`~flowrun.kernel.following.RingFollowing`).
 
     Args:
         position: unwrapped positions, m, ``(N, B)``.

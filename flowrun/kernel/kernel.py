@@ -14,10 +14,11 @@ from flowrun.kernel.lane_neighbours import lane_graph
 from flowrun.kernel.lanes import LaneTable
 from flowrun.kernel.network import NetworkKernel
 from flowrun.kernel.population import VehicleTable
+from flowrun.kernel.ring_reader import ring_fast_path
 from flowrun.kernel.simulation import SimulationKernel
 from flowrun.kernel.sumo import SumoFiles, SumoProcess
 from flowrun.kernel.traffic_light import TrafficLightKernel
-from flowrun.kernel.vehicle import OpenVehicleKernel, VehicleKernel, ring_fast_path
+from flowrun.kernel.vehicle import VehicleKernel
 from flowrun.networks.base import Network, TemplateVehicle
 from flowrun.networks.build import build_network
 from flowrun.networks.routes import route_name, routes_xml
@@ -95,8 +96,7 @@ class Kernel:
         ring = ring_fast_path(spec, table)
         lanes = None if ring else LaneTable.read(api, spec)
         self.network = NetworkKernel(spec, lanes, network)
-        kernel_class = VehicleKernel if ring else OpenVehicleKernel
-        self.vehicle = kernel_class(table, spec, self.sim_params.sim_step, rng)
+        self.vehicle = VehicleKernel(table, spec, self.sim_params.sim_step, rng)
         self.vehicle.read_xy = read_xy
         self.vehicle.group_routers = self.group_routers
         self.vehicle.lane_view = lane_graph(self.network)  # Flow's lane leaders' search

@@ -23,9 +23,9 @@ from typing import Any
 
 import numpy as np
 
+from flowrun.kernel.following import leaders_by_lane
 from flowrun.kernel.lane_graph import LaneGraph
 from flowrun.kernel.population import Population
-from flowrun.kernel.snapshot import leaders_by_lane
 from flowrun.types import FloatArray, IntArray
 
 #: How far past the end (or before the start) of its lane a car looks for a leader

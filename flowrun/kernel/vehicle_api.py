@@ -25,6 +25,7 @@ from flowrun.kernel.lane_neighbours import (
 
 if TYPE_CHECKING:
     from flowrun.kernel.population import Population, VehicleTable
+    from flowrun.kernel.state import VehicleState
     from flowrun.networks.base import NetworkSpec
 
 #: Flow's value for "no such vehicle" in numeric getters.
@@ -58,46 +59,31 @@ class FlowVehicleGetters:
     dt: float
     api: Any
     read_xy: bool
-    speed: np.ndarray
-    prev_speed: np.ndarray
-    headway: np.ndarray
-    tailway: np.ndarray
-    leader: np.ndarray
-    follower: np.ndarray
-    lanes: np.ndarray
-    position: np.ndarray
-    speed_limit: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
+    state: VehicleState
     last_cmd: np.ndarray
-    departed_ids: list[str]
-    arrived_ids: list[str]
-    _flow_counts: deque[tuple[int, int]]
-    _leader_ids: tuple[np.ndarray | None, list[str]]
-    _observed: dict[str, None]
+    _pending_removal: list[str]
     #: set by the environment: Flow's per-vehicle controller objects
     controllers: Any = None
-    _edges_cache: list[str] | None
-    _pending_removal: list[str]
     #: the network as Flow's lane-neighbour search walks it (set by the kernel at reset)
     lane_view: LaneGraphView
-    _route_end: np.ndarray
-    _stale_edges: bool
+    _max_speed_set: dict[str, float]
+
+    def __init__(self) -> None:
+        #: vehicles an environment marked as observed, in order
+        self._observed: dict[str, None] = {}
+        self._leader_ids: tuple[np.ndarray | None, list[str]] = (None, [])
+        self._initial_row_cache: dict[str, int] | None = None
 
     @property
-    def edges(self) -> list[str]:  # implemented by the kernel
+    def departed_ids(self) -> Sequence[str]:  # implemented by the kernel
         raise NotImplementedError
 
     @property
-    def lane_pos(self) -> np.ndarray:  # implemented by the kernel
+    def arrived_ids(self) -> Sequence[str]:  # implemented by the kernel
         raise NotImplementedError
 
     @property
-    def accel_real(self) -> np.ndarray:  # implemented by the kernel
-        raise NotImplementedError
-
-    @property
-    def odometer(self) -> np.ndarray:  # implemented by the kernel
+    def _flow_counts(self) -> deque[tuple[int, int]]:  # implemented by the kernel
         raise NotImplementedError
 
     # ------------------------------------------------------------------ Flow's getters
@@ -208,35 +194,34 @@ class FlowVehicleGetters:
 
     def set_headway(self, veh_id: str, headway: float) -> None:
         """Overwrite the vehicle's headway until the next step (Flow's test hook)."""
-        self.headway = self.headway.copy()  # frames may hold the old array
-        self.headway[self.table.row(veh_id)] = headway
+        self.state.headway = self.state.headway.copy()  # frames may hold the old array
+        self.state.headway[self.table.row(veh_id)] = headway
 
     def set_leader(self, veh_id: str, leader: str | None) -> None:
         """Overwrite the vehicle's leader until the next step (Flow's test hook)."""
-        self.leader = self.leader.copy()
-        self.leader[self.table.row(veh_id)] = self.table.row(leader) if leader else -1
+        self.state.leader = self.state.leader.copy()
+        self.state.leader[self.table.row(veh_id)] = self.table.row(leader) if leader else -1
 
     def set_follower(self, veh_id: str, follower: str | None) -> None:
         """Overwrite the vehicle's follower until the next step (Flow's test hook)."""
-        self.follower = self.follower.copy()
-        self.follower[self.table.row(veh_id)] = self.table.row(follower) if follower else -1
+        self.state.follower = self.state.follower.copy()
+        self.state.follower[self.table.row(veh_id)] = self.table.row(follower) if follower else -1
 
     def test_set_speed(self, veh_id: str, speed: float) -> None:
         """Overwrite the vehicle's speed until the next step (Flow's test hook)."""
-        self.speed = self.speed.copy()
-        self.speed[self.table.row(veh_id)] = speed
+        self.state.speed = self.state.speed.copy()
+        self.state.speed[self.table.row(veh_id)] = speed
 
     def test_set_edge(self, veh_id: str, edge: str) -> None:
         """Overwrite the vehicle's edge until the next step (Flow's test hook)."""
-        edges = list(self.edges)
+        edges = list(self.state.edges)
         edges[self.table.row(veh_id)] = edge
-        self._edges_cache = edges
-        self._stale_edges = False
+        self.state.edges = edges
 
     def get_ids_by_edge(self, edges: str | Iterable[str]) -> list[str]:
         """Ids of the vehicles on the given edge(s)."""
         wanted = {edges} if isinstance(edges, str) else set(edges)
-        return [vid for vid, e in zip(self.table.ids, self.edges, strict=True) if e in wanted]
+        return [vid for vid, e in zip(self.table.ids, self.state.edges, strict=True) if e in wanted]
 
     def get_type(self, veh_id: str) -> str:
         """The vehicle's group name."""
@@ -244,22 +229,22 @@ class FlowVehicleGetters:
 
     def get_speed(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
         """Speed in m/s (a list for a list of ids; ``error`` for an unknown id)."""
-        return self._get(self.speed, veh_id, error)
+        return self._get(self.state.speed, veh_id, error)
 
     def get_previous_speed(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
         """Speed at the step before, m/s."""
-        return self._get(self.prev_speed, veh_id, error)
+        return self._get(self.state.prev_speed, veh_id, error)
 
     def get_x_by_id(self, veh_id: str) -> float:
         """Position along the network, m: the start of the car's edge (junction-internal
         edges included, see ``k.network.get_x``) plus its lane position; 0 if unknown."""
         if veh_id not in self.table:
             return 0.0
-        return float(self.position[self.table.row(veh_id)])
+        return float(self.state.position[self.table.row(veh_id)])
 
     def get_position(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
         """Position on the current lane, m."""
-        return self._get(self.lane_pos, veh_id, error)
+        return self._get(self.state.lane_pos, veh_id, error)
 
     def get_2d_position(self, veh_id: str) -> tuple[float, float]:
         """(x, y) coordinates, m."""
@@ -267,7 +252,7 @@ class FlowVehicleGetters:
         if not self.read_xy:
             x, y = self.api.vehicle.getPosition(veh_id)
             return float(x), float(y)
-        return float(self.x[i]), float(self.y[i])
+        return float(self.state.x[i]), float(self.state.y[i])
 
     def get_edge(self, veh_id: str | Sequence[str], error: str = "") -> Any:
         """Edge id (``error`` for an unknown id)."""
@@ -275,7 +260,7 @@ class FlowVehicleGetters:
             return [self.get_edge(v, error) for v in veh_id]
         if veh_id not in self.table:
             return error
-        return self.edges[self.table.row(veh_id)]
+        return self.state.edges[self.table.row(veh_id)]
 
     def get_lane(self, veh_id: str | Sequence[str], error: int = int(ERROR)) -> Any:
         """Lane index."""
@@ -283,7 +268,7 @@ class FlowVehicleGetters:
             return [self.get_lane(v, error) for v in veh_id]
         if veh_id not in self.table:
             return error
-        return int(self.lanes[self.table.row(veh_id)])
+        return int(self.state.lanes[self.table.row(veh_id)])
 
     def get_headway(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
         """Bumper-to-bumper gap to the leader, m: Flow's 1000 without a leader.
@@ -291,29 +276,29 @@ class FlowVehicleGetters:
         The kernel's own :attr:`headway` array keeps ``inf`` there: the vectorised
         controllers read that as "no leader", as Flow's test the leader id.
         """
-        h = self._get(self.headway, veh_id, error)
+        h = self._get(self.state.headway, veh_id, error)
         if isinstance(h, list):
             return [NO_NEIGHBOUR_GAP if x == math.inf else x for x in h]
         return NO_NEIGHBOUR_GAP if h == math.inf else h
 
     def get_tailway(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
         """Gap from the follower's front bumper to this car's rear bumper, m."""
-        return self._get(self.tailway, veh_id, error)
+        return self._get(self.state.tailway, veh_id, error)
 
     def get_leader(self, veh_id: str) -> str | None:
         """Id of the vehicle ahead (in the lane, or past its end along the route) or ``None``."""
         if veh_id not in self.table:
             return None
-        j = int(self.leader[self.table.row(veh_id)])
+        j = int(self.state.leader[self.table.row(veh_id)])
         return self.table.ids[j] if j >= 0 else None
 
     def leader_ids(self) -> list[str]:
         """Leader id of every vehicle (``""`` without leader); reused while the order holds."""
-        if self._leader_ids[0] is not self.leader:
+        if self._leader_ids[0] is not self.state.leader:
             ids = self.table.ids
             self._leader_ids = (
-                self.leader,
-                [ids[j] if j >= 0 else "" for j in self.leader.tolist()],
+                self.state.leader,
+                [ids[j] if j >= 0 else "" for j in self.state.leader.tolist()],
             )
         return self._leader_ids[1]
 
@@ -321,7 +306,7 @@ class FlowVehicleGetters:
         """Id of the vehicle behind (in the lane, or before its start), or ``None``."""
         if veh_id not in self.table:
             return None
-        j = int(self.follower[self.table.row(veh_id)])
+        j = int(self.state.follower[self.table.row(veh_id)])
         return self.table.ids[j] if j >= 0 else None
 
     def get_length(self, veh_id: str) -> float:
@@ -330,11 +315,11 @@ class FlowVehicleGetters:
 
     def get_distance(self, veh_id: str) -> float:
         """Distance travelled since the episode started, m."""
-        return float(self.odometer[self.table.row(veh_id)])
+        return float(self.state.odometer[self.table.row(veh_id)])
 
     def get_realized_accel(self, veh_id: str) -> float:
         """Acceleration realised over the last step, m/s^2."""
-        return float(self.accel_real[self.table.row(veh_id)])
+        return float(self.state.accel_real[self.table.row(veh_id)])
 
     def get_accel(self, veh_id: str) -> float | None:
         """Acceleration commanded for the last step, m/s^2 (``None`` when SUMO drove)."""
@@ -352,7 +337,7 @@ class FlowVehicleGetters:
         return float(self.initial.initial_speeds[rows[veh_id]])
 
     def _initial_rows(self) -> dict[str, int]:
-        rows: dict[str, int] | None = getattr(self, "_initial_row_cache", None)
+        rows = self._initial_row_cache
         if rows is None:
             rows = {vid: i for i, vid in enumerate(self.initial.ids)}
             self._initial_row_cache = rows
@@ -360,7 +345,7 @@ class FlowVehicleGetters:
 
     def get_max_speed(self, veh_id: str) -> float:
         """The vehicle's maximum speed, m/s: its type's, or the last ``set_max_speed``."""
-        chosen = self.__dict__.get("_max_speed_set", {}).get(veh_id)
+        chosen = self._max_speed_set.get(veh_id)
         if chosen is not None:
             return float(chosen)
         return float(self.table.max_speeds[self.table.row(veh_id)])
@@ -370,12 +355,6 @@ class FlowVehicleGetters:
         if veh_id not in self.table:
             return ()
         return tuple(self.api.vehicle.getRoute(veh_id))
-
-    @property
-    def route_end(self) -> np.ndarray:
-        """Every car's route's last edge, as an index into ``edge_names`` (-1 if unknown);
-        kept by the kernel on open networks (as ``edge_index``), no SUMO call."""
-        return self._route_end
 
     # ------------------------------------------------------------------ departures, arrivals
     def get_departed_ids(self) -> list[str]:
@@ -435,19 +414,18 @@ class FlowVehicleGetters:
     def get_lane_leaders_speed(self, veh_id: str) -> list[float]:
         """Speed of the lane leader on each lane (0 where none), m/s."""
         rows = self._lane_neighbours(veh_id).leaders
-        return [float(self.speed[j]) if j >= 0 else 0.0 for j in rows]
+        return [float(self.state.speed[j]) if j >= 0 else 0.0 for j in rows]
 
     def get_lane_followers_speed(self, veh_id: str) -> list[float]:
         """Speed of the lane follower on each lane (0 where none), m/s."""
         rows = self._lane_neighbours(veh_id).followers
-        return [float(self.speed[j]) if j >= 0 else 0.0 for j in rows]
+        return [float(self.state.speed[j]) if j >= 0 else 0.0 for j in rows]
 
     def _lane_neighbours(self, veh_id: str) -> LaneNeighbours:
-        edges = self.edges
+        s = self.state
         return lane_neighbours(
-            self.table.row(veh_id), edges, self.lanes, self.lane_pos, self.table.lengths,
-            self.lane_view,
-        )  # fmt: skip
+            self.table.row(veh_id), s.edges, s.lanes, s.lane_pos, self.table.lengths, self.lane_view
+        )
 
     def _ids_or_blank(self, row: int) -> str:
         return self.table.ids[row] if row >= 0 else ""

@@ -20,8 +20,10 @@ import numpy as np
 from flowrun.kernel.vehicle_api import ERROR, without_removed
 
 if TYPE_CHECKING:
-    from flowrun.kernel.lanes import LaneTable
+    from flowrun.kernel.open_reader import OpenReader
     from flowrun.kernel.population import Population
+    from flowrun.kernel.ring_reader import RingReader
+    from flowrun.kernel.state import VehicleState
     from flowrun.kernel.sumo import FastCalls
     from flowrun.networks.base import Edge, NetworkSpec
 
@@ -100,37 +102,42 @@ class LaneChangeLog:
 
 
 class VehicleCommands:
-    """Flow's ``apply_acceleration``, ``apply_lane_change`` and ``choose_routes``."""
+    """Flow's ``apply_acceleration``, ``apply_lane_change`` and ``choose_routes``: the
+    commands of one step, buffered per row until :meth:`send_commands`.
+
+    Args:
+        size: the rows of the population now.
+    """
 
     table: Population
     spec: NetworkSpec
     api: Any
     dt: float
-    ring_path: bool
-    speed: np.ndarray
-    speed_limit: np.ndarray
-    lanes: np.ndarray
-    on_internal: np.ndarray
-    accel_cmd: np.ndarray
-    last_cmd: np.ndarray
-    _no_cmd: np.ndarray
-    _fast: FastCalls
-    _lane_change: dict[int, int]
-    _routes: dict[int, list[str]]
-    _next_reroute: np.ndarray
-    _route_end: np.ndarray
-    _route_of: dict[str, tuple[str, ...]]
-    _pending_removal: list[str]
-    _lanes: LaneTable | None
-    _edge_by_id: dict[str, Edge]
-    _multi_lane: bool
-    #: simulation steps this kernel has sent commands for (one per step since it attached)
-    _steps_sent: int = 0
-    _lane_key: np.ndarray
+    state: VehicleState
+    reader: RingReader | OpenReader
+    _fast: FastCalls | None
 
-    @property
-    def edges(self) -> list[str]:  # implemented by the kernel
-        raise NotImplementedError
+    def __init__(self, size: int) -> None:
+        self._edge_by_id: dict[str, Edge] = {e.id: e for e in self.spec.edges}
+        self._multi_lane = any(e.lanes > 1 for e in self.spec.edges)
+        #: cars taken out with ``remove`` since the last update
+        self._pending_removal: list[str] = []
+        #: simulation steps this kernel has sent commands for (one per step since it attached)
+        self._steps_sent = 0
+        self._lc_log: LaneChangeLog | None = None
+        self._max_speed_set: dict[str, float] = {}
+        self.commands_for(size)
+
+    def commands_for(self, size: int) -> None:
+        """Empty command buffers for ``size`` rows (the population's rows changed)."""
+        self._all = slice(0, size)
+        self._no_cmd = np.full(size, np.nan)
+        #: the accelerations commanded this step (NaN: none), m/s^2
+        self.accel_cmd = self._no_cmd.copy()
+        #: the accelerations sent at the last step (NaN: none), m/s^2
+        self.last_cmd = np.full(size, np.nan)
+        self._lane_change: dict[int, int] = {}
+        self._routes: dict[int, list[str]] = {}
 
     def apply_acceleration(self, veh_ids: str | Sequence[str], acc: Any) -> None:
         """Command accelerations (m/s^2): next-step speed will be ``v + a*dt`` (Flow's rule)."""
@@ -145,9 +152,7 @@ class VehicleCommands:
 
         As in Flow, a car on a junction-internal lane is left to SUMO for that step.
         """
-        if not self.ring_path:
-            acc = np.where(self.on_internal[idx], np.nan, acc)
-        self.accel_cmd[idx] = acc
+        self.accel_cmd[idx] = self.state.commandable(acc, idx)
 
     def apply_lane_change(self, veh_ids: str | Sequence[str], direction: Any) -> None:
         """Change lane: ``+1`` left, ``-1`` right, ``0`` stay (Flow's convention)."""
@@ -173,14 +178,13 @@ class VehicleCommands:
         """The episode's :class:`LaneChangeLog`, brought up to the current step; lane
         changes are logged from the first call on (an env that counts them calls this at
         reset)."""
-        log: LaneChangeLog | None = self.__dict__.get("_lc_log")
+        log = self._lc_log
         if log is None:
-            log = self.__dict__["_lc_log"] = LaneChangeLog()
+            log = self._lc_log = LaneChangeLog()
         if self._multi_lane:
-            lanes = self.lanes
-            if self._lanes is not None:
-                edge = self._lanes.edge_index[self._lane_key]
-            else:  # a closed ring: lane numbers never change between edges
+            lanes = self.state.lanes
+            edge = self.state.edge_index
+            if edge is None:  # a closed ring: lane numbers never change between edges
                 edge = np.zeros(lanes.size, dtype=np.int64)
             # the state of step n (since the kernel attached) follows n sent commands
             log.observe(lanes, edge, self.table.ids, self.table.version, self._steps_sent)
@@ -216,7 +220,7 @@ class VehicleCommands:
     def set_max_speed(self, veh_id: str, max_speed: float) -> None:
         """Set the car's maximum speed, m/s (SUMO's ``setMaxSpeed``, at once)."""
         self.api.vehicle.setMaxSpeed(veh_id, float(max_speed))
-        self.__dict__.setdefault("_max_speed_set", {})[veh_id] = float(max_speed)
+        self._max_speed_set[veh_id] = float(max_speed)
 
     def add(self, veh_id: str, type_id: str, edge: str, pos: float | str,
             lane: int | str, speed: float | str) -> bool:  # fmt: skip
@@ -248,7 +252,7 @@ class VehicleCommands:
 
     def send_commands(self) -> None:
         """Send the buffered commands to SUMO and clear them (once per simulation step)."""
-        if self._multi_lane and "_lc_log" in self.__dict__:  # lanes before this step
+        if self._multi_lane and self._lc_log is not None:  # lanes before this step
             self.lane_change_log()
         self._steps_sent += 1
         v = self.api.vehicle
@@ -257,33 +261,31 @@ class VehicleCommands:
         if self._pending_removal:  # cars removed this step get no command (Flow)
             back = self.api.simulation.getPendingVehicles()
             cmd = without_removed(cmd, self.table, self._pending_removal, back)
+        assert self._fast is not None
         slow_down = self._fast.slow_down
+        state = self.state
         # Flow's rule (v + a*dt), never below 0 nor above the lane's speed limit (with
         # speedMode 0 SUMO would let a commanded car exceed the limit).
         if math.isfinite(_sum(cmd)):  # the common case: every car commanded, no indexing
-            target = np.minimum(np.maximum(self.speed + cmd * self.dt, 0.0), self.speed_limit)
+            target = np.minimum(np.maximum(state.speed + cmd * self.dt, 0.0), state.speed_limit)
             _consume(map(slow_down, ids, target.tolist(), repeat(SLOW_DOWN_DURATION)))
         elif np.count_nonzero(finite := np.isfinite(cmd)):  # (.any() adds a Python layer)
             todo = np.flatnonzero(finite)
             target = np.minimum(
-                np.maximum(self.speed[todo] + cmd[todo] * self.dt, 0.0), self.speed_limit[todo]
+                np.maximum(state.speed[todo] + cmd[todo] * self.dt, 0.0), state.speed_limit[todo]
             )
             for i, speed in zip(todo.tolist(), target.tolist(), strict=True):
                 slow_down(ids[i], speed, SLOW_DOWN_DURATION)
         for i, d in self._lane_change.items():
             if not math.isfinite(cmd[i]) and ids[i] in self._pending_removal:
                 continue
-            lanes = self._num_lanes(self.edges[i])
-            target_lane = min(max(int(self.lanes[i]) + d, 0), lanes - 1)
-            if target_lane != self.lanes[i]:
+            lanes = self._num_lanes(state.edges[i])
+            target_lane = min(max(int(state.lanes[i]) + d, 0), lanes - 1)
+            if target_lane != state.lanes[i]:
                 v.changeLane(ids[i], target_lane, LANE_CHANGE_HOLD)
         for i, route in self._routes.items():
             v.setRoute(ids[i], route)
-            if self.ring_path:
-                self._next_reroute[i] = np.inf  # a user-chosen route is not looped
-            elif route and self._lanes is not None:
-                self._route_end[i] = self._lanes.edge_pos.get(route[-1], -1)
-                self._route_of[ids[i]] = tuple(route)
+            self.reader.route_chosen(i, route)
         self.last_cmd = cmd
         self.accel_cmd = self._no_cmd.copy()
         self._lane_change = {}
@@ -293,5 +295,6 @@ class VehicleCommands:
         edge = self._edge_by_id.get(edge_id)
         if edge is not None:
             return edge.lanes
-        facts = None if self._lanes is None else self._lanes.edge_facts.get(edge_id)
+        table = self.reader.lanes
+        facts = None if table is None else table.edge_facts.get(edge_id)
         return 1 if facts is None else facts[0]

@@ -1,6 +1,9 @@
-"""The pure geometry of who follows whom: on a ring, and within the lanes of any network."""
+"""Who follows whom, as pure array functions: on a ring, within the lanes of any network, and
+the gaps and speeds around every car that follow from it (:func:`neighbours`, for both)."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -130,3 +133,55 @@ def leaders_by_lane(
     fronts = order[np.concatenate((~same, [True]))]
     rears = order[np.concatenate(([True], ~same))]
     return leader, follower, headway, fronts, rears
+
+
+@dataclass(eq=False)
+class Neighbours:
+    """Who follows whom, and the gaps and speeds around every car.
+
+    Attributes:
+        leader, follower: row of the car ahead / behind, -1 for none.
+        headway: gap from the front bumper to the leader's rear bumper, m (``inf``: none).
+        tailway: gap from the follower's front bumper to this car's rear bumper, m.
+        leader_speed, follower_speed: their speeds, m/s (the car's own without one).
+        follower_headway: the follower's headway, m (the tailway; ``inf`` without one).
+    """
+
+    leader: IntArray
+    follower: IntArray
+    headway: FloatArray
+    tailway: FloatArray
+    leader_speed: FloatArray
+    follower_speed: FloatArray
+    follower_headway: FloatArray
+
+
+def neighbours(
+    speed: FloatArray,
+    leader: IntArray,
+    follower: IntArray,
+    headway: FloatArray,
+    tailway: FloatArray | None = None,
+    complete: bool = False,
+) -> Neighbours:
+    """The neighbour speeds and the follower's gap of every car, from who follows whom.
+
+    Args:
+        speed: every car's speed, m/s.
+        leader, follower: rows of the cars ahead and behind (-1 for none).
+        headway: gap to the leader, m.
+        tailway: gap of the follower to the car, m (``None``: the follower's headway).
+        complete: every car has a leader and a follower (skips the checks for none).
+    """
+    if complete:
+        follower_headway = headway[follower]
+        return Neighbours(
+            leader, follower, headway, follower_headway, speed[leader], speed[follower],
+            follower_headway,
+        )  # fmt: skip
+    has_lead, has_fol = leader >= 0, follower >= 0
+    leader_speed = np.where(has_lead, speed[leader], speed)
+    follower_speed = np.where(has_fol, speed[follower], speed)
+    if tailway is None:
+        tailway = np.where(has_fol, headway[follower], np.inf)
+    return Neighbours(leader, follower, headway, tailway, leader_speed, follower_speed, tailway)
