@@ -1,4 +1,6 @@
-"""Flow's ``flow.controllers.base_controller`` import path.
+"""Flow compatibility: re-exports.
+
+Flow's ``flow.controllers.base_controller`` import path.
 
 ``BaseController`` is flowrun's :class:`~flowrun.controllers.base.AccelerationController`.
 A subclass either implements Flow's per-vehicle ``get_accel(self, env)`` (one object per

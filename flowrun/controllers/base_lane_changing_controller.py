@@ -1,4 +1,7 @@
-"""Flow's ``flow.controllers.base_lane_changing_controller`` import path."""
+"""Flow compatibility: re-exports.
+
+Flow's ``flow.controllers.base_lane_changing_controller`` import path.
+"""
 
 from flowrun.controllers.lane_change import LaneChangeController
 

@@ -1,4 +1,7 @@
-"""Flow's ``flow.controllers.base_routing_controller`` import path."""
+"""Flow compatibility: re-exports.
+
+Flow's ``flow.controllers.base_routing_controller`` import path.
+"""
 
 from flowrun.controllers.routing import Router
 

@@ -1,4 +1,7 @@
-"""Flow's ``flow.controllers.car_following_models`` import path (flowrun's classes)."""
+"""Flow compatibility: re-exports.
+
+Flow's ``flow.controllers.car_following_models`` import path (flowrun's classes).
+"""
 
 from flowrun.controllers.car_following import (
     BandoFTLController,

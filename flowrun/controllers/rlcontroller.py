@@ -1,4 +1,7 @@
-"""Flow's ``flow.controllers.rlcontroller`` import path (flowrun's class)."""
+"""Flow compatibility: re-exports.
+
+Flow's ``flow.controllers.rlcontroller`` import path (flowrun's class).
+"""
 
 from flowrun.controllers.rl import RLController
 

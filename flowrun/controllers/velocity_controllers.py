@@ -1,4 +1,7 @@
-"""Flow's ``flow.controllers.velocity_controllers`` import path (flowrun's classes)."""
+"""Flow compatibility: re-exports.
+
+Flow's ``flow.controllers.velocity_controllers`` import path (flowrun's classes).
+"""
 
 from flowrun.controllers.velocity import FollowerStopper, PISaturation
 

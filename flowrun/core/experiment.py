@@ -1,4 +1,6 @@
-"""Flow's ``flow.core.experiment``: ``Experiment(flow_params).run(num_runs)``.
+"""Flow compatibility: re-exports.
+
+Flow's ``flow.core.experiment``: ``Experiment(flow_params).run(num_runs)``.
 
 Both of Flow's forms work: ``Experiment(flow_params).run(num_runs, rl_actions=None,
 convert_to_csv=False)`` (the horizon comes from ``EnvParams``) and the tutorial's

@@ -1,4 +1,6 @@
-"""Flow's ``flow.core.params``: the parameter objects of an experiment.
+"""Flow compatibility: re-exports.
+
+Flow's ``flow.core.params``: the parameter objects of an experiment.
 
 Re-exported from :mod:`flowrun.config.params`, where the YAML config is built from the same
 classes.

@@ -1,7 +1,10 @@
-"""Flow's old names for networks (``flow.scenarios``): ``LoopScenario`` is the ring,
+"""Flow compatibility: re-exports.
+
+Flow's old names for networks (``flow.scenarios``): ``LoopScenario`` is the ring,
 ``Figure8Scenario``/``FigureEightScenario`` the figure eight, ``MergeScenario`` the merge and
 ``HighwayScenario`` the highway, ``BottleneckScenario`` the bottleneck,
-``HighwayRampsScenario`` the highway with ramps and ``MiniCityScenario`` the mini city."""
+``HighwayRampsScenario`` the highway with ramps and ``MiniCityScenario`` the mini city.
+"""
 
 from flowrun.networks.base import Network
 from flowrun.networks.bottleneck import BottleneckScenario

@@ -1,4 +1,7 @@
-"""``LoopScenario`` (Flow < 0.5 name of the ring network) and its ``ADDITIONAL_NET_PARAMS``."""
+"""Flow compatibility: re-exports.
+
+``LoopScenario`` (Flow < 0.5 name of the ring network) and its ``ADDITIONAL_NET_PARAMS``.
+"""
 
 from flowrun.networks.ring import ADDITIONAL_NET_PARAMS, RingNetwork
 

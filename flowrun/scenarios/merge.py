@@ -1,4 +1,7 @@
-"""Flow < 0.5 module path ``flow.scenarios.merge`` (now ``flowrun.networks``)."""
+"""Flow compatibility: re-exports.
+
+Flow < 0.5 module path ``flow.scenarios.merge`` (now ``flowrun.networks``).
+"""
 
 from flowrun.networks.merge import ADDITIONAL_NET_PARAMS, MergeScenario
 

@@ -1,4 +1,7 @@
-"""Flow < 0.5 module path ``flow.scenarios.minicity`` (now ``flowrun.networks``)."""
+"""Flow compatibility: re-exports.
+
+Flow < 0.5 module path ``flow.scenarios.minicity`` (now ``flowrun.networks``).
+"""
 
 from flowrun.networks.minicity import ADDITIONAL_NET_PARAMS, MiniCityScenario
 

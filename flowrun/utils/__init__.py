@@ -1,2 +1,5 @@
-"""Flow's ``flow.utils``: ``registry.make_create_env`` and ``env_constructor``,
-``rllib.FlowParamsEncoder`` and ``get_flow_params``, ``exceptions.FatalFlowError``."""
+"""Flow compatibility: re-exports.
+
+Flow's ``flow.utils``: ``registry.make_create_env`` and ``env_constructor``,
+``rllib.FlowParamsEncoder`` and ``get_flow_params``, ``exceptions.FatalFlowError``.
+"""

@@ -1,4 +1,7 @@
-"""Flow's ``flow.utils.exceptions`` import path."""
+"""Flow compatibility: re-exports.
+
+Flow's ``flow.utils.exceptions`` import path.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,7 @@
-"""Flow < 0.5 module path ``flow.envs.loop.lane_changing``."""
+"""Flow compatibility: re-exports.
+
+Flow < 0.5 module path ``flow.envs.loop.lane_changing``.
+"""
 
 from flowrun.envs.ring.lane_change import ADDITIONAL_ENV_PARAMS, LaneChangeAccelEnv
 

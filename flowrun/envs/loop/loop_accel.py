@@ -1,4 +1,7 @@
-"""Flow < 0.5 module path ``flow.envs.loop.loop_accel``."""
+"""Flow compatibility: re-exports.
+
+Flow < 0.5 module path ``flow.envs.loop.loop_accel``.
+"""
 
 from flowrun.envs.ring.accel import ADDITIONAL_ENV_PARAMS, AccelEnv
 

@@ -1,4 +1,7 @@
-"""Flow < 0.5 module path ``flow.envs.loop.wave_attenuation``."""
+"""Flow compatibility: re-exports.
+
+Flow < 0.5 module path ``flow.envs.loop.wave_attenuation``.
+"""
 
 from flowrun.envs.ring.wave_attenuation import (
     ADDITIONAL_ENV_PARAMS,

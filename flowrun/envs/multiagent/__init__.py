@@ -1,4 +1,6 @@
-"""Flow's module path ``flow.envs.multiagent``: the classes of :mod:`flowrun.multiagent`.
+"""Flow compatibility: re-exports.
+
+Flow's module path ``flow.envs.multiagent``: the classes of :mod:`flowrun.multiagent`.
 
 ``from flowrun.envs.multiagent import MultiAgentWaveAttenuationPOEnv`` works as Flow's import
 did (PettingZoo is imported with the class, not with :mod:`flowrun.envs`).
