@@ -2,16 +2,14 @@
 
 from __future__ import annotations
 
-import math
 import sys
 from dataclasses import replace
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-from rich.table import Table
+from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeRemainingColumn
 
 from flowrun.cli.common import (
     DEFAULT_OUT,
@@ -27,6 +25,8 @@ from flowrun.cli.common import (
     overrides_with_seed,
     sigterm_as_interrupt,
 )
+from flowrun.cli.feedback import Feedback
+from flowrun.cli.tables import metrics_table, signals_table
 
 __all__ = [  # the shared options, re-exported for the commands that import them from here
     "AnyConfigArg",
@@ -37,8 +37,10 @@ __all__ = [  # the shared options, re-exported for the commands that import them
     "baseline",
     "console",
     "interrupt_between_steps",
+    "metrics_table",
     "overrides_with_seed",
     "register",
+    "signals_table",
     "sigterm_as_interrupt",
 ]
 
@@ -46,55 +48,6 @@ console = Console()
 
 #: Steps between progress-bar updates.
 PROGRESS_EVERY = 100
-
-
-def metrics_table(title: str, rows: list[Any]) -> Table:
-    """The closing table: one row per run."""
-    table = Table(title=title)
-    for col in (
-        "run",
-        "mean speed",
-        "last-half mean",
-        "speed std",
-        "min speed",
-        "return",
-        "collisions",
-        "teleports",
-    ):
-        table.add_column(col, justify="right")
-    for m in rows:
-        table.add_row(
-            str(m.run),
-            f"{m.mean_speed:.3f} m/s",
-            f"{m.last_half_mean_speed:.3f} m/s",
-            f"{m.speed_std:.3f} m/s",
-            f"{m.min_speed:.3f} m/s",
-            f"{m.episode_return:.2f}",
-            str(m.collisions),
-            str(m.teleports),
-        )
-    return table
-
-
-def signals_table(title: str, rows: list[Any]) -> Table:
-    """The signal-control table: one row per run (:class:`SignalMetrics`)."""
-    table = Table(title=title)
-    for col in ("run", "mean delay", "mean travel time", "throughput", "mean queue",
-                "waiting at end"):  # fmt: skip
-        table.add_column(col, justify="right")
-    for i, m in enumerate(rows):
-        table.add_row(str(i), _value(m.mean_delay, ".1f", " s"),
-                      _value(m.mean_travel_time, ".1f", " s"),
-                      _value(m.throughput, ".0f", " veh/h"), _value(m.mean_queue, ".2f", " veh"),
-                      str(m.waiting_at_end))  # fmt: skip
-    return table
-
-
-def _value(x: float | None, spec: str, unit: str) -> str:
-    """A number with its unit, or "-" when it could not be measured (e.g. no car finished)."""
-    if x is None or not math.isfinite(x):
-        return "-"
-    return f"{x:{spec}}{unit}"
 
 
 @guarded
@@ -143,45 +96,47 @@ def baseline(
     cfg, where = load_located(config, overrides_with_seed(set_, seed))
     preflight(replace(cfg, train=None), where)  # env class and its params, at file:line
     total = resolve_steps(cfg, steps)
+    feedback = Feedback(console)
     columns = (
         TextColumn("run {task.fields[run]}"),
         BarColumn(),
         MofNCompleteColumn(),
         TimeRemainingColumn(),
     )
-    with Progress(
-        *columns, console=console, transient=True, disable=not sys.stderr.isatty()
-    ) as bar:
-        task = bar.add_task("baseline", total=total * runs, run=0)
+    with (
+        feedback.progress(
+            columns, lambda f: f"run {f['run']} of {runs}", total=total * runs, run=0
+        ) as update,
+        interrupt_between_steps() as check_stop,
+    ):
 
-        with interrupt_between_steps() as check_stop:
+        def progress(run: int, step: int) -> None:
+            # The bar redraws ~10 times a second anyway; an update costs microseconds,
+            # a noticeable share of one Sugiyama step.
+            if step % PROGRESS_EVERY == 0 or step == total:
+                update(completed=run * total + step, run=run)
+            check_stop()
 
-            def progress(run: int, step: int) -> None:
-                # The bar redraws ~10 times a second anyway; an update costs microseconds,
-                # a noticeable share of one Sugiyama step.
-                if step % PROGRESS_EVERY == 0 or step == total:
-                    bar.update(task, completed=run * total + step, run=run)
-                check_stop()
-
-            try:
-                result = run_baseline(
-                    cfg,
-                    runs=runs,
-                    steps=steps,
-                    out=out,
-                    record=not no_record,
-                    record_every=record_every,
-                    scene=scene,
-                    render=render,
-                    argv=sys.argv,
-                    progress=progress,
-                    folder=folder,
-                )
-            except KeyboardInterrupt as err:
-                raise interrupted_exit(
-                    err, "logs finished; status.json and metrics.json say so"
-                ) from None
-    console.print(metrics_table(f"{cfg.name}: {runs} run(s) x {total} steps", result.metrics))
+        try:
+            result = run_baseline(
+                cfg,
+                runs=runs,
+                steps=steps,
+                out=out,
+                record=not no_record,
+                record_every=record_every,
+                scene=scene,
+                render=render,
+                argv=sys.argv,
+                progress=progress,
+                folder=folder,
+            )
+        except KeyboardInterrupt as err:
+            raise interrupted_exit(
+                err, "logs finished; status.json and metrics.json say so"
+            ) from None
+    title = f"{cfg.name}: {runs} run(s) x {total} steps"
+    console.print(metrics_table(title, result.metrics, with_outflow=not result.signals))
     if result.signals:
         how = result.signal_controller or "the network's programs / the env's actions"
         console.print(signals_table(f"signal control: {how}", result.signals))
@@ -192,7 +147,7 @@ def baseline(
         )
         if result.animation.note:
             typer.secho(f"note: {result.animation.note}", err=True, fg=typer.colors.YELLOW)
-    console.print(f"run folder: {result.run_dir}")
+    feedback.close(f"run folder: {result.run_dir}")
 
 
 def register(app: typer.Typer) -> None:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
@@ -13,12 +13,10 @@ import typer
 from rich.progress import (
     BarColumn,
     MofNCompleteColumn,
-    Progress,
     TextColumn,
     TimeElapsedColumn,
     TimeRemainingColumn,
 )
-from rich.table import Table
 
 from flowrun.cli.commands_run import (
     AnyConfigArg,
@@ -29,11 +27,15 @@ from flowrun.cli.commands_run import (
     overrides_with_seed,
 )
 from flowrun.cli.common import DEFAULT_OUT, guarded, load_located, on_stop_signals, out_option
+from flowrun.cli.feedback import Feedback, duration
+from flowrun.cli.tables import compare_table
 from flowrun.errors import FlowrunError
 
 if TYPE_CHECKING:
+    from flowrun.config.model import ExperimentConfig
     from flowrun.experiment.metrics import RunMetrics
     from flowrun.rundir.train_state import StopRequest
+    from flowrun.training.trainer import TrainResult
 
 RunDirArg = Annotated[Path, typer.Argument(help="A train run folder.", show_default=False)]
 EvalOutOpt = Annotated[
@@ -82,10 +84,6 @@ def stop_on_signals() -> Iterator[StopRequest]:
         yield request
 
 
-def _progress_bar(*columns: Any) -> Progress:
-    return Progress(*columns, console=console, transient=True, disable=not sys.stderr.isatty())
-
-
 @guarded
 def train(
     config: AnyConfigArg,
@@ -119,7 +117,6 @@ def train(
     from flowrun.config.preflight import preflight
     from flowrun.training.deps import require
     from flowrun.training.trainer import resume_config
-    from flowrun.training.trainer import train as run_training
 
     overrides = overrides_with_seed(set_, seed)
     if seed is not None:
@@ -146,7 +143,7 @@ def train(
         preflight(cfg, where)  # env class, its params, hyper-parameter names: at file:line
     rllib = cfg.train is not None and cfg.train.backend == "rllib"
     if rllib:
-        from flowrun.training.rllib import require_ray, train_rllib
+        from flowrun.training.rllib import require_ray
 
         require_ray()
     else:
@@ -156,18 +153,74 @@ def train(
                 "--ray-address is for train.backend: rllib; this config trains with "
                 "stable-baselines3 (set train.backend: rllib, or drop --ray-address)"
             )
+    feedback = Feedback(console)
+    train_cfg = cfg.train or TrainConfig()
+    if rllib:
+        feedback.phase("starting Ray and its environment runners (RLlib)")
+    elif cfg.sim.backend == "numpy":
+        feedback.phase(f"starting {train_cfg.n_envs} numpy rings and the {train_cfg.algorithm} "
+                       "model")
+    else:
+        feedback.phase(
+            f"starting {train_cfg.n_envs} environment process(es) and the "
+            f"{train_cfg.algorithm} model"
+        )
+    result = _train_with_progress(feedback, cfg, out, resume, rllib, ray_address, config)
+    resumed = f" (resumed at {result.resumed_from})" if result.resumed_from else ""
+    timing = result.timing
+    share = (
+        f", evaluation {timing.evaluation_share:.0%} of it"
+        if timing is not None and timing.evaluation_share > 0
+        else ""
+    )
+    feedback.phase(
+        f"training finished: {result.timesteps} steps{resumed} in {duration(result.wall_clock)}"
+        f" ({result.steps_per_second:.0f} steps/s{share})"
+    )
+    episodes = train_cfg.eval_episodes
+    feedback.phase(
+        f"final evaluation: the trained model (best, else final) and the all-human baseline, "
+        f"{episodes} episode(s) each, recorded"
+    )
+    shown = _evaluate_and_show(result.run_dir, episodes, True, [], None, "best", None, feedback)
+    feedback.close(f"run folder: {result.run_dir}; evaluation folder: {shown}")
+
+
+def _train_with_progress(
+    feedback: Feedback,
+    cfg: ExperimentConfig,
+    out: Path,
+    resume: Path | None,
+    rllib: bool,
+    ray_address: str | None,
+    config: Path,
+) -> TrainResult:
+    """Run the training with its progress display; exit 130/143 when interrupted."""
+    from flowrun.training.trainer import train as run_training
+
     columns = (TextColumn("training"), BarColumn(), MofNCompleteColumn(),
                TextColumn("mean reward {task.fields[reward]}"), TimeElapsedColumn(),
-               TimeRemainingColumn())
-    with _progress_bar(*columns) as bar, stop_on_signals() as stop:
-        task = bar.add_task("train", total=None, reward="-")
+               TimeRemainingColumn())  # fmt: skip
+    started = [False]
+
+    def describe(fields: Mapping[str, Any]) -> str:
+        return f"training, mean episode reward {fields['reward']}"
+
+    with (
+        feedback.progress(columns, describe, None, reward="-") as update,
+        stop_on_signals() as stop,
+    ):
 
         def progress(done: int, total: int, reward: float | None) -> None:
-            shown = "-" if reward is None else f"{reward:.1f}"
-            bar.update(task, completed=done, total=total, reward=shown)
+            if not started[0]:
+                started[0] = True
+                feedback.phase(f"training for {total} steps")
+            update(completed=done, total=total, reward="-" if reward is None else f"{reward:.1f}")
 
         try:
             if rllib:
+                from flowrun.training.rllib import train_rllib
+
                 result = train_rllib(cfg, out=out, resume_dir=resume, progress=progress,
                                      argv=sys.argv, should_stop=stop, ray_address=ray_address)
             else:
@@ -176,17 +229,11 @@ def train(
         except KeyboardInterrupt:
             console.print("[yellow]interrupted[/]: checkpoint saved; continue with --resume")
             raise typer.Exit(code=stop.exit_code) from None
-    resumed = f" (resumed at {result.resumed_from})" if result.resumed_from else ""
     if result.status != "complete" or stop():
         console.print(f"[yellow]interrupted[/] at {result.timesteps} steps: checkpoint saved; "
                       f"continue with: flowrun train {config} --resume {result.run_dir}")
         raise typer.Exit(code=stop.exit_code)
-    timing = result.timing
-    share = f", evaluation {timing.evaluation_share:.0%} of it" if timing is not None else ""
-    console.print(f"trained to {result.timesteps} steps{resumed} in {result.wall_clock:.0f} s "
-                  f"({result.steps_per_second:.0f} steps/s{share}); run folder: {result.run_dir}")
-    episodes = cfg.train.eval_episodes if cfg.train is not None else 1
-    _evaluate_and_show(result.run_dir, episodes, True, [], None, "best", None)
+    return result
 
 
 @guarded
@@ -223,8 +270,10 @@ def eval_(
 
     if not is_rllib_run(run_dir):
         require("stable_baselines3")
-    _evaluate_and_show(run_dir, episodes, deterministic, overrides_with_seed(set_, seed),
-                       config, model, out)
+    feedback = Feedback(console)
+    shown = _evaluate_and_show(run_dir, episodes, deterministic, overrides_with_seed(set_, seed),
+                               config, model, out, feedback)  # fmt: skip
+    feedback.close(f"evaluation folder: {shown}")
 
 
 def _evaluate_and_show(
@@ -235,7 +284,10 @@ def _evaluate_and_show(
     config: Path | None,
     model: str,
     out: Path | None,
-) -> None:
+    feedback: Feedback,
+) -> Path:
+    """Roll out the policy and the all-human baseline, print their table; the evaluation
+    folder."""
     from flowrun.rundir.train_state import run_state
     from flowrun.training.evaluate import eval_config, evaluate, model_path
     from flowrun.training.rllib import evaluate_rllib, is_rllib_run
@@ -255,13 +307,22 @@ def _evaluate_and_show(
         console.print(f"[yellow]note[/]: {run_dir} {what}; evaluating its saved model anyway "
                       f"(metrics.json records run_status: {state})")
     columns = (TextColumn("{task.fields[label]} episode {task.fields[episode]}"), BarColumn(),
-               MofNCompleteColumn(), TimeRemainingColumn())
+               MofNCompleteColumn(), TimeRemainingColumn())  # fmt: skip
+
+    def describe(fields: Mapping[str, Any]) -> str:
+        return f"evaluating: {fields['label']} episode {fields['episode']}"
+
     # Stop at a step boundary so the MCAP log being written is finished cleanly.
-    with _progress_bar(*columns) as bar, stop_on_signals() as stop:
-        task = bar.add_task("eval", total=int(horizon), label="policy", episode=0)
+    steps = int(horizon)
+    with (
+        feedback.progress(columns, describe, 2 * episodes * steps, label="policy", episode=0)
+        as update,
+        stop_on_signals() as stop,
+    ):
 
         def progress(label: str, episode: int, step: int) -> None:
-            bar.update(task, completed=step, label=label, episode=episode)
+            before = (0 if label == "policy" else episodes) + episode
+            update(completed=before * steps + step, label=label, episode=episode)
             stop.check()
 
         try:
@@ -276,32 +337,17 @@ def _evaluate_and_show(
             # the signal also stopped a child process (netconvert): still an interruption
             console.print("[yellow]interrupted[/]: evaluation logs finished")
             raise typer.Exit(code=stop.exit_code) from None
-    console.print(compare_table(f"{run_dir.name}: {result.model.name}, {episodes} episode(s)",
-                                result.policy, result.baseline))
-    console.print(f"evaluation folder: {result.out_dir}")
+    title = f"{run_dir.name}: {result.model.name}, {episodes} episode(s)"
+    console.print(compare_table(title, _rows(result.policy), _rows(result.baseline)))
+    return Path(result.out_dir)
 
 
-def compare_table(title: str, policy: list[RunMetrics], baseline: list[RunMetrics]) -> Table:
-    """Policy vs all-human baseline, one row per episode each, then the means."""
+def _rows(runs: list[RunMetrics]) -> list[dict[str, Any]]:
+    """Each episode's metrics, then their mean when there are several."""
     from flowrun.training.evaluate import mean_metrics
 
-    table = Table(title=title, caption="speeds in m/s; std: across cars, averaged over steps")
-    for col in ("rollout", "episode", "mean speed", "last-half mean speed", "speed std",
-                "last-half speed std", "min speed", "return", "collisions"):
-        table.add_column(col, justify="right")
-    for label, rows in (("policy", policy), ("all-human", baseline)):
-        for m in rows:
-            table.add_row(label, str(m.run), *_cells(m.to_dict()))
-        if len(rows) > 1:
-            table.add_row(label, "mean", *_cells(mean_metrics(rows)))
-    return table
-
-
-def _cells(m: dict[str, Any]) -> list[str]:
-    speeds = ("mean_speed", "last_half_mean_speed", "speed_std", "last_half_speed_std",
-              "min_speed")
-    return [*(f"{m[k]:.3f}" for k in speeds), f"{m['episode_return']:.1f}",
-            f"{m['collisions']:g}"]
+    rows: list[dict[str, Any]] = [m.to_dict() for m in runs]
+    return [*rows, {**mean_metrics(runs), "run": "mean"}] if len(runs) > 1 else rows
 
 
 def register(app: typer.Typer) -> None:
