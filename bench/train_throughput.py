@@ -1,33 +1,46 @@
-"""Training throughput: environment steps per second with 1 and 2 ``SubprocVecEnv`` envs.
+"""Training throughput against the env's own speed, per config, in one run.
 
-Learning updates are included (``n_steps`` per env, then an update), so the number is what
-``flowrun train`` achieves, not the raw simulator speed. Measured for PPO and for the config's
-own algorithm (with its hyper-parameters, ``n_steps`` capped so that an update happens), plus
-the raw single-env step rate (no learning) for comparison. No evaluation runs are included.
+For each config: the env's own rate (one env in this process, no learning, zero actions,
+resets included), then the rate of ``flowrun.training.train`` (exactly what ``flowrun train``
+runs, start-up and the closing evaluation left out) with the config's ``train:`` section and
+``train.n_envs`` envs, and the ratio of the two. The target on a machine of ``C`` cores is a
+ratio of at least ``0.6 * C``. Periodic evaluation is off unless ``--eval`` (it runs on one env
+in the driver process); checkpoints are off.
 
-    .venv/bin/python bench/train_throughput.py [--config configs/ring_wave.yaml] [--steps 12000]
+    .venv/bin/python bench/train_throughput.py [CONFIG ...] [--steps 30000] [--eval]
+        [--set train.n_envs=4]
+
+Without CONFIG: the four benchmarks figureeight0, merge0, grid0 and bottleneck0. Each part of
+the training's wall clock (env stepping, policy inference, updates) is printed after it.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
 from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.envs.factory import make_env
-from flowrun.training.algorithms import algorithm_class, build_hyperparams
-from flowrun.training.vecenv import make_vec_env
+from flowrun.training.trainer import train
+
+BENCHMARKS = tuple(
+    f"configs/benchmarks/{name}.yaml"
+    for name in ("figureeight0", "merge0", "grid0", "bottleneck0")
+)
 
 
-def raw_env_rate(cfg: ExperimentConfig, steps: int) -> float:
+def env_rate(cfg: ExperimentConfig, steps: int) -> float:
     """Env steps/s of one env in this process, zero action, resets included."""
     env = make_env(cfg)
     try:
         env.reset(seed=0)
-        action = np.zeros(env.action_space.shape, dtype=np.float32)
+        action = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
         start = time.perf_counter()
         for _ in range(steps):
             _, _, terminated, truncated, _ = env.step(action)
@@ -38,50 +51,54 @@ def raw_env_rate(cfg: ExperimentConfig, steps: int) -> float:
         env.close()
 
 
-def train_rate(cfg: ExperimentConfig, algorithm: str, n_envs: int, steps: int) -> float:
-    """Env steps/s of an on-policy algorithm learning on ``n_envs`` subprocesses.
-
-    The config's hyper-parameters are used when it trains with ``algorithm``, SB3's otherwise.
-    """
-    import torch
-
-    torch.set_num_threads(1)  # as flowrun train does
-    assert cfg.train is not None
-    tc = cfg.train
-    venv = make_vec_env(cfg, n_envs, seed=0)
-    try:
-        own = tc.hyperparams if tc.algorithm == algorithm else {}
-        hyper = build_hyperparams(algorithm, own, 1)
-        hyper["n_steps"] = min(int(hyper.get("n_steps", 2048)), steps // n_envs)
-        hyper["batch_size"] = min(int(hyper.get("batch_size", 64)), hyper["n_steps"] * n_envs)
-        model = algorithm_class(algorithm)(
-            "MlpPolicy", venv, policy_kwargs=dict(tc.policy_kwargs) or None, seed=0,
-            device="cpu", **hyper,
+def train_rate(config: str, sets: list[str], steps: int, evaluate: bool) -> tuple[float, str]:
+    """Env steps/s of ``train`` on the config (start-up excluded), and its time breakdown."""
+    overrides = [*sets, f"train.total_timesteps={steps}", "train.checkpoint_freq=100000000"]
+    if not evaluate:
+        overrides.append("train.eval_freq=0")
+    cfg = load_config(config, overrides)
+    with tempfile.TemporaryDirectory() as out:
+        result = train(cfg, out=Path(out), argv=["bench/train_throughput.py"])
+    timing = result.timing
+    assert timing is not None and cfg.train is not None
+    done = max(result.timesteps, 1)
+    parts = ", ".join(
+        f"{label} {1e6 * seconds / done:.0f}"
+        for label, seconds in (
+            ("env wait", timing.env_wait), ("inference+loop", timing.inference),
+            ("updates", timing.update), ("evaluation", timing.evaluation),
         )
-        start = time.perf_counter()
-        model.learn(steps)
-        return model.num_timesteps / (time.perf_counter() - start)
-    finally:
-        venv.close()
+    )
+    detail = f"{cfg.train.n_envs} envs; µs per env step: {parts}"
+    return result.steps_per_second, detail
 
 
 def main() -> None:
-    """Print the throughput table."""
+    """Print the table: env rate, training rate, ratio, target."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--config", default="configs/ring_wave.yaml")
-    parser.add_argument("--steps", type=int, default=12_000, help="env steps per measurement")
+    parser.add_argument("configs", nargs="*", default=list(BENCHMARKS))
+    parser.add_argument("--steps", type=int, default=30_000, help="training env steps")
+    parser.add_argument("--env-steps", type=int, default=6_000, help="env-alone steps")
+    parser.add_argument("--eval", action="store_true", help="keep the periodic evaluation")
+    parser.add_argument("--set", dest="sets", action="append", default=[])
     args = parser.parse_args()
-    cfg = load_config(args.config)
-    print(f"config {args.config}: horizon {cfg.env.horizon}, warm-up {cfg.env.warmup_steps}")
-    raw = raw_env_rate(cfg, args.steps)
-    print(f"raw env (1 env in this process, no learning, warm-up resets incl.): "
-          f"{raw:8.0f} env steps/s")
-    assert cfg.train is not None
-    for algorithm in dict.fromkeys(("PPO", cfg.train.algorithm)):
-        for n in (1, 2):
-            rate = train_rate(cfg, algorithm, n, args.steps)
-            print(f"{algorithm}, {n} SubprocVecEnv env(s), updates incl.: "
-                  f"{rate:8.0f} env steps/s")
+    cores = os.cpu_count() or 1
+    print(f"{cores} cores; load {os.getloadavg()[0]:.2f} (1-min average); target ratio "
+          f">= {0.6 * cores:.1f}", flush=True)
+    rows = []
+    for config in args.configs:
+        cfg = load_config(config, args.sets)
+        alone = env_rate(cfg, args.env_steps)
+        rate, detail = train_rate(config, args.sets, args.steps, args.eval)
+        ratio = rate / alone
+        rows.append((cfg.name, alone, rate, ratio))
+        print(f"{cfg.name}: env alone {alone:.0f} steps/s, training {rate:.0f} steps/s, "
+              f"ratio {ratio:.2f} ({detail}); load {os.getloadavg()[0]:.2f}", flush=True)
+    print("\n| config | env alone, steps/s | training, steps/s | ratio | target |")
+    print("|---|---:|---:|---:|---:|")
+    for name, alone, rate, ratio in rows:
+        mark = "yes" if ratio >= 0.6 * cores else "no"
+        print(f"| {name} | {alone:.0f} | {rate:.0f} | {ratio:.2f} | {mark} |")
 
 
 if __name__ == "__main__":

@@ -96,6 +96,13 @@ def timed_vec_env(venv: VecEnv, timing: TrainTiming) -> VecEnv:
         def reset(self) -> Any:
             return self.venv.reset()
 
+        def env_method(self, method_name: str, *args: Any, **kwargs: Any) -> Any:
+            start = time.perf_counter()  # whole rollouts stepped in the env processes
+            try:
+                return self.venv.env_method(method_name, *args, **kwargs)
+            finally:
+                timing.env_wait += time.perf_counter() - start
+
         def step_wait(self) -> Any:
             start = time.perf_counter()
             try:

@@ -46,6 +46,7 @@ from flowrun.training.resume import (
 )
 from flowrun.training.timing import TrainTiming, timed_vec_env, timing_callback
 from flowrun.training.vecenv import make_vec_env, wrap_normalize
+from flowrun.training.worker_rollouts import with_worker_rollouts
 
 if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
@@ -136,7 +137,7 @@ def train(
     tc = train_section(cfg)
     seed = train_seed(cfg)
     cfg = replace(cfg, sim=replace(cfg.sim, seed=int(cfg.sim.seed or 0)))
-    cls = algorithm_class(tc.algorithm)
+    cls = with_worker_rollouts(algorithm_class(tc.algorithm))
     build_hyperparams(tc.algorithm, tc.hyperparams)  # report a typo before any work
     env_class(cfg)  # a wrong env.class or missing additional_params, also before any work
     check_numpy_backend(cfg)  # sim.backend numpy: a config it cannot run, before any work
@@ -286,7 +287,8 @@ def _training_env(
     monitor_dir.mkdir(exist_ok=True)
     # Resumed runs reseed differently so they do not replay the first episodes.
     env_seed = seed if state is None else seed + int(state["timesteps"])
-    venv = make_vec_env(cfg, tc.n_envs, env_seed, monitor_dir=monitor_dir, subprocess=True)
+    venv = make_vec_env(cfg, tc.n_envs, env_seed, monitor_dir=monitor_dir, subprocess=True,
+                        worker_rollouts=True)
     venv = timed_vec_env(venv, timing)
     if tc.normalize:
         stats = None

@@ -24,11 +24,16 @@ class EnvFactory:
         cfg: the experiment.
         monitor_file: where ``Monitor`` writes episode returns (``None``: nowhere).
         seeds: reset seeds used in turn, over and over (``None``: the env's own generator).
+        rank: the env's index in its vectorised env.
+        rollouts: wrap the ``Monitor`` in a :class:`~flowrun.training.rollout.RolloutEnv`
+            (whole rollout segments stepped in the env's process).
     """
 
     cfg: ExperimentConfig
     monitor_file: str | None = None
     seeds: tuple[int, ...] | None = None
+    rank: int = 0
+    rollouts: bool = False
 
     def __call__(self) -> gymnasium.Env[Any, Any]:
         """Build the environment (in the process that calls it)."""
@@ -38,7 +43,12 @@ class EnvFactory:
         env: gymnasium.Env[Any, Any] = make_env(self.cfg)
         if self.seeds:
             env = CycleSeeds(env, self.seeds)
-        return monitor(env, filename=self.monitor_file, info_keywords=("mean_speed",))
+        env = monitor(env, filename=self.monitor_file, info_keywords=("mean_speed",))
+        if self.rollouts:
+            from flowrun.training.rollout import RolloutEnv
+
+            env = RolloutEnv(env, self.rank)
+        return env
 
 
 class CycleSeeds(gymnasium.Wrapper):
@@ -63,6 +73,7 @@ def make_vec_env(
     monitor_dir: Path | None = None,
     subprocess: bool = True,
     cycle_seeds: tuple[int, ...] | None = None,
+    worker_rollouts: bool = False,
 ) -> VecEnv:
     """``n_envs`` environments of a config; env ``rank`` is seeded ``seed + rank``.
 
@@ -74,6 +85,9 @@ def make_vec_env(
         subprocess: one subprocess per env (required for more than one env); ``False``
             builds a single env in this process.
         cycle_seeds: reset seeds each env uses in turn (for repeatable evaluations).
+        worker_rollouts: let an on-policy algorithm step whole rollouts in the env
+            processes (:mod:`flowrun.training.worker_rollouts`; subprocesses only): the
+            returned env's ``worker_rollouts`` attribute is then true.
 
     With ``sim.backend: numpy`` the ``n_envs`` rings run in this process as one
     :class:`~flowrun.fastring.vec_env.RingVecEnv` (``subprocess`` does not apply) in a
@@ -84,12 +98,14 @@ def make_vec_env(
         return _numpy_vec_env(cfg, n_envs, seed, monitor_dir, cycle_seeds)
     factories = [
         EnvFactory(
-            cfg, None if monitor_dir is None else str(monitor_dir / f"env_{rank}"), cycle_seeds
+            cfg, None if monitor_dir is None else str(monitor_dir / f"env_{rank}"), cycle_seeds,
+            rank, worker_rollouts and subprocess,
         )
         for rank in range(n_envs)
     ]
     if subprocess:
         venv: VecEnv = vec.SubprocVecEnv(factories, start_method="forkserver")
+        venv.worker_rollouts = worker_rollouts  # type: ignore[attr-defined]
     else:
         if n_envs != 1:
             raise ValueError("more than one env needs subprocesses (libsumo: one SUMO a process)")

@@ -1,0 +1,124 @@
+"""Rollouts stepped in the env processes: the buffer SB3 learns from, seeds, the numpy policy."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from flowrun.config.loader import load_config
+from flowrun.training.rollout import ObsStats
+from flowrun.training.vecenv import make_vec_env, wrap_normalize
+from flowrun.training.worker_rollouts import numpy_actor_critic, with_worker_rollouts
+
+pytestmark = pytest.mark.train
+pytest.importorskip("stable_baselines3")
+
+CONFIG = Path(__file__).resolve().parents[1] / "configs" / "ring_wave.yaml"
+SMALL = ["env.horizon=200", "env.warmup_steps=0"]
+
+
+def _ppo(venv: Any, **kwargs: Any) -> Any:
+    from stable_baselines3 import PPO
+
+    return with_worker_rollouts(PPO)(
+        "MlpPolicy", venv, n_steps=256, batch_size=128, n_epochs=1, seed=0, device="cpu",
+        policy_kwargs={"net_arch": [16, 16]}, **kwargs,
+    )
+
+
+def test_the_buffer_holds_what_the_policy_did_on_the_normalised_observations() -> None:
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    cfg = load_config(CONFIG, SMALL)
+    venv = wrap_normalize(make_vec_env(cfg, 2, seed=0, worker_rollouts=True), None, True)
+    seen: dict[str, Any] = {}
+
+    class Check(BaseCallback):
+        def _on_step(self) -> bool:
+            seen["steps"] = seen.get("steps", 0) + 1
+            return True
+
+        def _on_rollout_end(self) -> None:
+            import torch
+
+            buf = self.model.rollout_buffer
+            obs = torch.as_tensor(buf.observations.reshape(-1, buf.observations.shape[-1]))
+            actions = torch.as_tensor(buf.actions.reshape(-1, buf.actions.shape[-1]))
+            with torch.no_grad():
+                values, log_prob, _ = self.model.policy.evaluate_actions(obs, actions)
+            seen["value_error"] = float(np.abs(values.numpy().ravel()
+                                               - buf.values.ravel()).max())
+            seen["log_prob_error"] = float(np.abs(log_prob.numpy() - buf.log_probs.ravel()).max())
+            seen["starts"] = buf.episode_starts.copy()
+            seen["obs"] = buf.observations.copy()
+
+    try:
+        model = _ppo(venv)
+        model.learn(1024, callback=Check())
+        assert type(model).__name__ == "PPO"
+        assert seen["steps"] == 512  # one callback step per vectorised step, as SB3's loop
+        assert seen["value_error"] < 1e-4 and seen["log_prob_error"] < 1e-3
+        # 200-step episodes: the second rollout (steps 256..511) starts one at step 400
+        assert seen["starts"][144].all() and seen["starts"].sum() == 2
+        assert np.abs(seen["obs"]).max() <= 10.0  # VecNormalize's clip
+        assert len(model.ep_info_buffer) == 4  # Monitor's episode infos of both rollouts
+        assert venv.obs_rms.count == pytest.approx(2 + 1024, abs=0.01)  # resets + every step
+    finally:
+        venv.close()
+
+
+def test_same_seed_same_policy() -> None:
+    cfg = load_config(CONFIG, SMALL)
+    params = []
+    for _ in range(2):
+        venv = wrap_normalize(make_vec_env(cfg, 2, seed=5, worker_rollouts=True), None, True)
+        try:
+            model = _ppo(venv)
+            model.learn(512)
+            params.append([p.detach().numpy().copy() for p in model.policy.parameters()])
+        finally:
+            venv.close()
+    for a, b in zip(*params, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_one_observation_at_a_time_is_running_mean_std_exactly() -> None:
+    from stable_baselines3.common.running_mean_std import RunningMeanStd
+
+    rng = np.random.default_rng(1)
+    rms = RunningMeanStd(shape=(3,))
+    stats = ObsStats(rms.mean.copy(), rms.var.copy(), rms.count, 10.0, 1e-8)
+    for _ in range(50):
+        x = rng.normal(5.0, 2.0, 3)
+        rms.update(x[None])
+        stats.update(x)
+    np.testing.assert_array_equal(stats.mean, rms.mean)
+    np.testing.assert_array_equal(stats.var, rms.var)
+    assert stats.count == rms.count
+
+
+def test_numpy_copy_matches_the_torch_policy_or_declines() -> None:
+    import torch
+    from stable_baselines3 import PPO
+
+    cfg = load_config(CONFIG, SMALL)
+    venv = make_vec_env(cfg, 1, seed=0, subprocess=False)
+    try:
+        model = PPO("MlpPolicy", venv, seed=0, device="cpu",
+                    policy_kwargs={"net_arch": [32, 8], "activation_fn": torch.nn.ReLU})
+        copy = numpy_actor_critic(model.policy)
+        assert copy is not None
+        obs = np.random.default_rng(0).normal(size=(5, venv.observation_space.shape[0]))
+        with torch.no_grad():
+            tensor = torch.as_tensor(obs, dtype=torch.float32)
+            mean = model.policy.get_distribution(tensor).distribution.mean.numpy()
+            value = model.policy.predict_values(tensor).numpy()
+        np.testing.assert_allclose(copy.actor(obs), mean, atol=1e-5)
+        np.testing.assert_allclose(copy.critic(obs), value, atol=1e-5)
+        sde = PPO("MlpPolicy", venv, use_sde=True, seed=0, device="cpu")
+        assert numpy_actor_critic(sde.policy) is None  # SB3's own loop then
+    finally:
+        venv.close()
