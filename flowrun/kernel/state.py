@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -29,7 +29,25 @@ from flowrun.types import BoolArray, FloatArray, IntArray
 
 if TYPE_CHECKING:
     from flowrun.kernel.geometry import RingEdges
-    from flowrun.kernel.open_reader import OpenReader
+    from flowrun.kernel.lanes import LaneTable
+
+
+class OpenReads(Protocol):
+    """What :class:`OpenState` asks of its reader (an
+    :class:`~flowrun.kernel.open_reader.OpenReader`), lazily, once per step."""
+
+    lanes: LaneTable
+    read_xy_each_step: bool
+
+    def read_place(self, speed: FloatArray) -> tuple[IntArray, FloatArray]: ...
+
+    def read_xy(self) -> tuple[FloatArray, FloatArray]: ...
+
+    def read_odometer(self) -> FloatArray: ...
+
+    def following(
+        self, speed: FloatArray, lane_key: IntArray, lane_pos: FloatArray
+    ) -> Neighbours: ...
 
 
 @dataclass(eq=False)
@@ -109,7 +127,7 @@ class OpenState:
     speed: FloatArray
     prev_speed: FloatArray
     dt: float
-    reader: OpenReader
+    reader: OpenReads
 
     @cached_property
     def accel_real(self) -> FloatArray:
