@@ -160,3 +160,19 @@ def test_browser_draws_each_car_where_the_log_puts_it(ring_log, tmp_path):
     # and not at t = 0: the cars moved, so the picture differs from the start
     start = _screenshot(page, "t=0", tmp_path / "start.png", tmp_path)
     assert not np.array_equal(start[BAR:, : WIDTH - SIDE], shot[BAR:, : WIDTH - SIDE])
+
+
+def test_numpy_backend_log_plays_on_a_circle_of_its_length(tmp_path):
+    from flowrun.fastring.record import record_episode
+
+    cfg = load_config(CONFIGS / "ring_wave_numpy.yaml", ["env.horizon=20", "env.warmup_steps=0"])
+    path = tmp_path / "numpy.mcap"
+    record_episode(cfg, path, seed=0)
+    log = open_log(path)
+    data, _ = player_data(log)
+    assert data["notes"] == [] and len(data["road"]["lanes"]) == 1
+    pts = np.array(data["road"]["lanes"][0][2]).reshape(-1, 2)
+    length = float(log.metadata["network_length"])
+    assert np.hypot(*pts.T) == pytest.approx(length / (2 * np.pi) + 1.6, abs=0.01)
+    frame = next(log.frames())  # the cars sit on that circle
+    assert np.hypot(frame.x, frame.y) == pytest.approx(length / (2 * np.pi) + 1.6, abs=1e-6)

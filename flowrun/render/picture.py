@@ -57,10 +57,13 @@ class View:
 
     @classmethod
     def fit(cls, bounds: tuple[float, float, float, float], size: int = 720) -> View:
-        """The view that fits ``bounds`` into at most ``size`` px on its longer side (the
-        shorter side at least 160 px, both even so that video encoders take them)."""
+        """The view that fits ``bounds`` into at most ``size`` px on its longer side (up to
+        twice that for a road much longer than wide; the shorter side at least 160 px, both
+        even so that video encoders take them)."""
         xmin, ymin, xmax, ymax = bounds
         w, h = max(xmax - xmin, 1.0), max(ymax - ymin, 1.0)
+        if w > 2.5 * h:  # a long straight road (merge, bottleneck): a wider picture
+            size = min(2 * size, round(size * w / h / 2.5))
         inner = size - 2 * MARGIN
         scale = inner / max(w, h)
         width = max(math.ceil(w * scale) + 2 * MARGIN, 360)
