@@ -176,3 +176,11 @@ def test_numpy_backend_log_plays_on_a_circle_of_its_length(tmp_path):
     assert np.hypot(*pts.T) == pytest.approx(length / (2 * np.pi) + 1.6, abs=0.01)
     frame = next(log.frames())  # the cars sit on that circle
     assert np.hypot(frame.x, frame.y) == pytest.approx(length / (2 * np.pi) + 1.6, abs=1e-6)
+
+
+@pytest.mark.sumo
+def test_a_time_window_and_vehicles_select_what_the_page_plays(ring_log):
+    chosen = next(open_log(ring_log).frames()).ids[:2]
+    data, _ = player_data(open_log(ring_log), 5.0, 10.0, chosen)
+    assert data["times"][0] == pytest.approx(5.0) and data["times"][-1] == pytest.approx(10.0)
+    assert sorted(data["vehicles"]["ids"]) == sorted(chosen)

@@ -308,7 +308,8 @@ def register(app: typer.Typer) -> None:
                     typer.echo(f"wrote {foxglove} ({n} logged steps)")
                 if html is not None:
                     page = _interruptible(
-                        lambda: write_html(opened[0], html), f"nothing was written to {html}"
+                        lambda: write_html(opened[0], html, start, end, chosen),
+                        f"nothing was written to {html}",
                     )
                     typer.echo(f"wrote {html} ({page.bytes / 1e6:.1f} MB, {page.frames} steps)")
                     for note in page.notes:

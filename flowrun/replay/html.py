@@ -75,9 +75,9 @@ def _b64(a: np.ndarray) -> str:
     return base64.b64encode(np.ascontiguousarray(a).tobytes()).decode("ascii")
 
 
-def _stride(log: McapLog) -> int:
+def _stride(log: McapLog, start: float | None, end: float | None) -> int:
     """Every how many logged steps to keep so that the car data stays within the budget."""
-    car_steps = sum(s.num_vehicles for s in log.stats())
+    car_steps = sum(s.num_vehicles for s in log.stats(start, end))
     if not car_steps:  # no stats (damaged): estimate from the frame count
         car_steps = (log.frame_count or 0) * 200
     return max(1, math.ceil(car_steps * BYTES_PER_CAR / BUDGET_BYTES))
@@ -173,7 +173,7 @@ def _lights(log: McapLog, times: list[float]) -> dict[str, Any]:
     events: list[list[Any]] = []
     last: dict[str, str] = {}
     index = {t: i for i, t in enumerate(times)}
-    for sig in log.signals():
+    for sig in log.signals(times[0], times[-1]):
         i = index.get(float(sig.time))
         if i is None:
             continue
@@ -184,13 +184,19 @@ def _lights(log: McapLog, times: list[float]) -> dict[str, Any]:
     return {"events": events}
 
 
-def player_data(log: McapLog) -> tuple[dict[str, Any], int]:
-    """Everything the page shows, as one JSON-able dict, and the thinning stride."""
+def player_data(
+    log: McapLog,
+    start: float | None = None,
+    end: float | None = None,
+    vehicles: list[str] | None = None,
+) -> tuple[dict[str, Any], int]:
+    """Everything the page shows, as one JSON-able dict, and the thinning stride (optionally
+    the logged steps from ``start`` to ``end`` s and only some vehicles)."""
     road, missing = log_road(log)
     notes = [missing] if missing else []
-    stride = _stride(log)
+    stride = _stride(log, start, end)
     cols = _Columns()
-    for k, frame in enumerate(log.frames()):
+    for k, frame in enumerate(log.frames(start, end, vehicles)):
         if k % stride:
             continue
         if road is not None and len(frame.edges) == len(frame.ids):
@@ -200,7 +206,7 @@ def player_data(log: McapLog) -> tuple[dict[str, Any], int]:
             heading = np.zeros(len(frame.ids))
         cols.add(frame, heading)
     if not cols.times:
-        raise RecordingError(f"{log.path} holds no logged step to play")
+        raise RecordingError(f"{log.path} holds no logged step to play in the selection")
     if road is not None:
         bounds = road.bounds
     else:
@@ -220,7 +226,11 @@ def player_data(log: McapLog) -> tuple[dict[str, Any], int]:
         title=log.path.name,
         notes=notes,
         headline={
-            k: v for k, v in summary_rows(summarize(log)).items() if not k.endswith("version")
+            k: v
+            for k, v in summary_rows(
+                summarize(log, start_s=start, end_s=end, vehicles=vehicles)
+            ).items()
+            if not k.endswith("version")
         },
         bounds=list(bounds),
         road=_road_json(road),
@@ -230,8 +240,15 @@ def player_data(log: McapLog) -> tuple[dict[str, Any], int]:
     return data, stride
 
 
-def write_html(log: McapLog, out: Path) -> HtmlReport:
-    """Write the player page of ``log`` to ``out`` (a new file; nothing half written).
+def write_html(
+    log: McapLog,
+    out: Path,
+    start: float | None = None,
+    end: float | None = None,
+    vehicles: list[str] | None = None,
+) -> HtmlReport:
+    """Write the player page of ``log`` to ``out`` (a new file; nothing half written),
+    optionally of the logged steps from ``start`` to ``end`` s and only some vehicles.
 
     Raises:
         RecordingError: ``out`` exists, is a folder or cannot be written; the log holds no
@@ -241,7 +258,7 @@ def write_html(log: McapLog, out: Path) -> HtmlReport:
         raise RecordingError(f"--html {out} is a folder; give the new page's file name in it")
     if out.exists() or out.is_symlink():
         raise RecordingError(f"--html {out} exists; choose a new path (nothing is overwritten)")
-    data, stride = player_data(log)
+    data, stride = player_data(log, start, end, vehicles)
     text = json.dumps(data, separators=(",", ":"), allow_nan=False)
     page = PLAYER.read_text(encoding="utf-8").replace(
         "/*FLOWRUN_DATA*/null", text.replace("</", "<\\/")
