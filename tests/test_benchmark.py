@@ -177,8 +177,11 @@ def test_help_shares_the_common_option_texts() -> None:
     group = typer.main.get_command(app)
     params = {c: {p.opts[0]: p.help for p in group.commands[c].params  # type: ignore[attr-defined]
                   if p.param_type_name == "option"} for c in ("benchmark", "baseline", "sweep")}
-    for flag in ("--set", "--seed", "--out"):
+    for flag in ("--set", "--seed"):
         assert params["benchmark"][flag] == params["baseline"][flag]
+    # --out names a folder on both, each saying what it receives there
+    assert params["benchmark"]["--out"].split(",")[0] != params["baseline"]["--out"].split(",")[0]
+    assert "OUT/benchmark/<timestamp>/" in params["benchmark"]["--out"]
     assert params["benchmark"]["--seeds"] == "Seeds per benchmark."
     for flag in ("--seeds", "--jobs", "--train", "--configs", "--record"):
         assert params["benchmark"][flag]

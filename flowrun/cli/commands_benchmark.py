@@ -22,24 +22,36 @@ from flowrun.cli.commands_run import console
 from flowrun.cli.commands_sweep import run_points
 from flowrun.cli.common import (
     DEFAULT_OUT,
-    OutOpt,
     SeedOpt,
     SetOpt,
     guarded,
     interrupted_exit,
+    out_option,
 )
 from flowrun.errors import ConfigError, FlowrunError
 from flowrun.experiment.benchmark import Benchmark
 from flowrun.experiment.benchmark_run import BenchmarkPlan
 from flowrun.experiment.sweep import SweepPoint
 
+#: Steps of each run of ``flowrun benchmark`` without names (a quick look).
+QUICK_STEPS = 50
+
 NamesArg = Annotated[
     list[str] | None,
     typer.Argument(
         help="Benchmarks: names (figureeight0 ... bottleneck2), families (figureeight, merge, "
-        "grid, bottleneck) or all.",
-        show_default="all",
+        f"grid, bottleneck) or all. Without any: a quick look at all of them, {QUICK_STEPS} "
+        "steps each, one seed.",
+        metavar="NAME",
+        show_default=False,
     ),
+]
+
+
+BenchmarkOutOpt = Annotated[
+    Path,
+    out_option("a new benchmark folder, OUT/benchmark/<timestamp>/ (results and a run folder "
+               "per run)"),
 ]
 
 
@@ -81,12 +93,62 @@ def _first_seed(bench: Benchmark, configs: Path | None, sets: tuple[str, ...]) -
         raise ConfigError(f"benchmark {bench.name}: {err}") from None
 
 
+def make_plan(
+    names: list[str],
+    seeds: int,
+    jobs: int | None,
+    train: bool,
+    configs: Path | None,
+    record: bool,
+    seed: int | None,
+    sets: list[str],
+    out: Path,
+) -> BenchmarkPlan:
+    """What ``flowrun benchmark`` runs, checked before anything starts. No ``names``: all
+    benchmarks for :data:`QUICK_STEPS` steps (a quick look; a ``--set env.horizon`` wins).
+
+    Raises:
+        ConfigError: an unknown benchmark, a bad number, a config that does not load.
+        FlowrunError: ``--train`` without stable-baselines3, an unusable ``out``.
+    """
+    from flowrun.experiment import benchmark as bm
+    from flowrun.experiment.benchmark_run import folder_name
+    from flowrun.rundir.folders import check_out_dir, unique_dir
+
+    if not names:
+        sets = [f"env.horizon={QUICK_STEPS}", *sets]
+    chosen = bm.select(names or ["all"])
+    if seeds < 1:
+        raise ConfigError(f"--seeds must be >= 1, got {seeds}")
+    if jobs is not None and jobs < 1:
+        raise ConfigError(f"--jobs must be >= 1, got {jobs}")
+    first = seed if seed is not None else _first_seed(chosen[0], configs, tuple(sets))
+    plan = BenchmarkPlan(
+        folder=out / "benchmark" / folder_name(),
+        benchmarks=tuple(chosen),
+        seeds=tuple(range(first, first + seeds)),
+        configs=(configs if configs is not None else bm.default_config_dir()).resolve(),
+        sets=tuple(sets),
+        train=train,
+        record=record,
+    )
+    if train:
+        from flowrun.training.deps import require
+
+        require("stable_baselines3")
+    _check_configs(plan)
+    check_out_dir(out)
+    return replace(plan, folder=unique_dir(plan.folder).resolve())
+
+
 @guarded
 def benchmark(
     names: NamesArg = None,
-    seeds: Annotated[int, typer.Option("--seeds", help="Seeds per benchmark.")] = 1,
+    seeds: Annotated[int, typer.Option("--seeds", metavar="N",
+    help="Seeds per benchmark.")] = 1,
     jobs: Annotated[
-        int | None, typer.Option("--jobs", help="Runs at once (default: CPU count).")
+        int | None, typer.Option("--jobs", metavar="N",
+        help="Runs at once (default: CPU count).")
     ] = None,
     train: Annotated[
         bool,
@@ -100,6 +162,7 @@ def benchmark(
         Path | None,
         typer.Option(
             "--configs",
+            metavar="DIR",
             help="Folder of the benchmark configs (default: configs/benchmarks).",
             show_default=False,
         ),
@@ -109,7 +172,7 @@ def benchmark(
     ] = False,
     seed: SeedOpt = None,
     set_: SetOpt = None,
-    out: OutOpt = DEFAULT_OUT,
+    out: BenchmarkOutOpt = DEFAULT_OUT,
 ) -> None:
     """Run Flow's benchmarks: each one's non-RL baseline over --seeds seeds, in parallel.
 
@@ -119,39 +182,18 @@ def benchmark(
 
     Reference: the score Flow's scripts expect of a trained policy.
 
-    --set applies to every benchmark (e.g. --set env.horizon=50 for a short run).
+    --set applies to every benchmark (e.g. --set env.horizon=50 for a short run). Without
+    names, every benchmark runs for 50 steps as a quick look: `flowrun benchmark all` runs
+    them at full length.
 
     Results: OUT/benchmark/<timestamp>/ (results.json, results.md, benchmark.png, run folders).
 
     Ctrl-C/SIGTERM keeps the finished runs and writes their table (exit 130/143).
     """
-    from flowrun.experiment import benchmark as bm
-    from flowrun.experiment.benchmark_run import folder_name
-    from flowrun.rundir.folders import check_out_dir, unique_dir
-
-    chosen = bm.select(names or ["all"])
-    if seeds < 1:
-        raise ConfigError(f"--seeds must be >= 1, got {seeds}")
-    if jobs is not None and jobs < 1:
-        raise ConfigError(f"--jobs must be >= 1, got {jobs}")
-    sets = tuple(set_ or [])
-    first = seed if seed is not None else _first_seed(chosen[0], configs, sets)
-    plan = BenchmarkPlan(
-        folder=out / "benchmark" / folder_name(),
-        benchmarks=tuple(chosen),
-        seeds=tuple(range(first, first + seeds)),
-        configs=(configs if configs is not None else bm.default_config_dir()).resolve(),
-        sets=sets,
-        train=train,
-        record=record,
-    )
-    if train:
-        from flowrun.training.deps import require
-
-        require("stable_baselines3")
-    _check_configs(plan)
-    check_out_dir(out)
-    plan = replace(plan, folder=unique_dir(plan.folder).resolve())
+    if not names:
+        console.print(f"a quick look: every benchmark for {QUICK_STEPS} steps; "
+                      "`flowrun benchmark all` runs them at full length", highlight=False)
+    plan = make_plan(names or [], seeds, jobs, train, configs, record, seed, set_ or [], out)
     _run(plan, jobs or os.cpu_count() or 1)
 
 

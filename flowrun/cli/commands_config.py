@@ -42,7 +42,8 @@ def register(app: typer.Typer) -> None:
             Path,
             typer.Argument(
                 help="Experiment config (YAML), or a Flow config module (.py defining "
-                "flow_params)."
+                "flow_params).",
+                metavar="CONFIG",
             ),
         ],
         set_: SetOpt = None,
@@ -50,7 +51,8 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Check CONFIG as baseline and train would, then print the resolved config as YAML.
 
-        CONFIG is a YAML file or a Flow config module (a .py file defining flow_params).
+        CONFIG is a YAML file or a Flow config module (a .py file defining flow_params; it
+        is imported, so its top-level code runs).
         Every problem a run would refuse is reported here first, as one line with the file,
         line and key path, and exit code 1; nothing is written. Settings that would have no
         effect are warned about. An import path (env.class: my_envs:MyEnv, a controller
@@ -67,7 +69,7 @@ def register(app: typer.Typer) -> None:
     @app.command("list")
     @guarded
     def list_(
-        what: Annotated[str, typer.Argument(help="envs, networks or controllers.")],
+        what: Annotated[str, typer.Argument(help="envs, networks or controllers.", metavar="WHAT")],
     ) -> None:
         """List the environment, network or controller names a config may use."""
         for name in list_names(what):

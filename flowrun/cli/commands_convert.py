@@ -61,7 +61,9 @@ def register(app: typer.Typer) -> None:
         config: Annotated[
             Path,
             typer.Argument(
-                help="Flow config module (.py defining flow_params).", show_default=False
+                help="Flow config module (.py defining flow_params).",
+                metavar="MODULE",
+                show_default=False,
             ),
         ],
         set_: SetOpt = None,
@@ -76,7 +78,8 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Print the YAML config equivalent to a Flow config module (flow_params).
 
-        --set and --seed change the written config (as they would change a run of it).
+        MODULE is imported, so its top-level code runs (as Flow's own scripts would run
+        it). --set and --seed change the written config (as they would change a run of it).
         """
         text = convert_text(config, overrides_with_seed(set_, seed))
         if out is None:

@@ -140,21 +140,33 @@ def register(app: typer.Typer) -> None:
     def replay(
         logs: Annotated[
             list[Path],
-            typer.Argument(help="One MCAP log, two to compare, or IN OUT with --repair."),
+            typer.Argument(
+                help="One MCAP log, two to compare, or IN OUT with --repair.", metavar="LOG"
+            ),
         ],
         start: Annotated[
-            float | None, typer.Option("--from", help="First simulation time to read, in seconds.")
+            float | None, typer.Option(
+                "--from",
+                metavar="SECONDS",
+                help="First simulation time to read, in seconds.")
         ] = None,
         end: Annotated[
-            float | None, typer.Option("--to", help="Last simulation time to read, in seconds.")
+            float | None, typer.Option(
+                "--to",
+                metavar="SECONDS",
+                help="Last simulation time to read, in seconds.")
         ] = None,
         vehicles: Annotated[
-            str | None, typer.Option("--vehicles", help="Only these vehicle ids: id,id,...")
+            str | None, typer.Option(
+                "--vehicles",
+                metavar="ID,ID,...",
+                help="Only these vehicle ids: id,id,...")
         ] = None,
         plot: Annotated[
             PlotKind | None,
             typer.Option(
                 "--plot",
+                metavar="KIND",
                 help="Write PNG plots: time-space diagram, speeds, traffic (speed, density "
                 "and outflow per minute), signals (queue per intersection approach with its "
                 "signal shaded; logs of networks with traffic lights), or all.",
@@ -164,6 +176,7 @@ def register(app: typer.Typer) -> None:
             str | None,
             typer.Option(
                 "--route",
+                metavar="EDGE,EDGE,...",
                 help="Edges of the road to plot along: a,b,c (default: the network's main "
                 "road, e.g. inflow_highway,left,center on the merge; on a ring the ring).",
             ),
@@ -177,7 +190,10 @@ def register(app: typer.Typer) -> None:
         ] = None,
         csv: Annotated[
             Path | None,
-            typer.Option("--csv", help="Export Flow emission-style CSV to exactly this new file."),
+            typer.Option(
+                "--csv",
+                metavar="FILE",
+                help="Export Flow emission-style CSV to exactly this new file."),
         ] = None,
         repair_: Annotated[
             bool,
@@ -191,6 +207,7 @@ def register(app: typer.Typer) -> None:
             Path | None,
             typer.Option(
                 "--foxglove",
+                metavar="FILE",
                 help="Write the selected steps/vehicles to exactly this new MCAP file.",
             ),
         ] = None,
@@ -198,6 +215,7 @@ def register(app: typer.Typer) -> None:
             Path | None,
             typer.Option(
                 "--html",
+                metavar="FILE",
                 help="Write a self-contained player page of the run (any browser, no server) "
                 "to exactly this new file.",
             ),

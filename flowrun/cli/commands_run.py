@@ -53,15 +53,22 @@ PROGRESS_EVERY = 100
 @guarded
 def baseline(
     config: AnyConfigArg,
-    runs: Annotated[int, typer.Option("--runs", help="Number of runs.")] = 1,
+    runs: Annotated[int, typer.Option("--runs", metavar="N",
+    help="Number of runs.")] = 1,
     steps: Annotated[
-        int | None, typer.Option("--steps", help="Steps per run (default: env.horizon).")
+        int | None, typer.Option(
+            "--steps",
+            metavar="N",
+            help="Steps per run (default: env.horizon).")
     ] = None,
     seed: SeedOpt = None,
     set_: SetOpt = None,
     out: OutOpt = DEFAULT_OUT,
     no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
-    record_every: Annotated[int, typer.Option("--record-every", help="Log every N-th step.")] = 1,
+    record_every: Annotated[int, typer.Option(
+        "--record-every",
+        metavar="N",
+        help="Log every N-th step.")] = 1,
     scene: Annotated[
         bool,
         typer.Option(

@@ -176,28 +176,40 @@ def sweep(
         list[str],
         typer.Option(
             "--grid",
+            metavar="KEY=V1,V2,...",
             help="key.path=v1,v2,... : the values to sweep (YAML scalars). Several multiply.",
         ),
     ],
-    seeds: Annotated[int, typer.Option("--seeds", help="Seeds per grid point.")] = 1,
+    seeds: Annotated[int, typer.Option("--seeds", metavar="N",
+    help="Seeds per grid point.")] = 1,
     jobs: Annotated[
         int | None,
         typer.Option(
-            "--jobs", help="Points run at once (default: CPU count; on Ray: the cluster's CPUs)."
+            "--jobs",
+            metavar="N",
+            help="Points run at once (default: CPU count; on Ray: the cluster's CPUs)."
         ),
     ] = None,
     metric: Annotated[
-        str, typer.Option("--metric", help="Metric plotted against the first --grid key.")
+        str, typer.Option(
+            "--metric",
+            metavar="NAME",
+            help="Metric plotted against the first --grid key.")
     ] = "mean_speed",
     steps: Annotated[
-        int | None, typer.Option("--steps", help="Steps per run (default: env.horizon).")
+        int | None, typer.Option(
+            "--steps",
+            metavar="N",
+            help="Steps per run (default: env.horizon).")
     ] = None,
-    runs: Annotated[int, typer.Option("--runs", help="Runs per point.")] = 1,
+    runs: Annotated[int, typer.Option("--runs", metavar="N",
+    help="Runs per point.")] = 1,
     no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
     backend: Annotated[
         str | None,
         typer.Option(
             "--backend",
+            metavar="local|ray",
             help="local: processes on this machine; ray: Ray tasks on a Ray cluster "
             "(default: local; ray with --ray-address).",
         ),
@@ -206,6 +218,7 @@ def sweep(
         str | None,
         typer.Option(
             "--ray-address",
+            metavar="ADDRESS",
             help="Ray cluster to run the points on; implies --backend ray (default with "
             "--backend ray: $RAY_ADDRESS, else a local Ray for the sweep).",
         ),

@@ -37,7 +37,9 @@ if TYPE_CHECKING:
     from flowrun.rundir.train_state import StopRequest
     from flowrun.training.trainer import TrainResult
 
-RunDirArg = Annotated[Path, typer.Argument(help="A train run folder.", show_default=False)]
+RunDirArg = Annotated[
+    Path, typer.Argument(help="A train run folder.", metavar="RUN_DIR", show_default=False)
+]
 EvalOutOpt = Annotated[
     Path | None,
     out_option("the evaluation folders, OUT/<timestamp>-<seed>/ (default OUT: RUN_DIR/eval)"),
@@ -92,12 +94,16 @@ def train(
     out: OutOpt = DEFAULT_OUT,
     resume: Annotated[
         Path | None,
-        typer.Option("--resume", help="Continue this run folder from its last checkpoint."),
+        typer.Option(
+            "--resume",
+            metavar="RUN_DIR",
+            help="Continue this run folder from its last checkpoint."),
     ] = None,
     ray_address: Annotated[
         str | None,
         typer.Option(
             "--ray-address",
+            metavar="ADDRESS",
             help="Ray cluster for train.backend: rllib (default: $RAY_ADDRESS, else a local Ray).",
         ),
     ] = None,
@@ -239,19 +245,26 @@ def _train_with_progress(
 @guarded
 def eval_(
     run_dir: RunDirArg,
-    episodes: Annotated[int, typer.Option("--episodes", help="Episodes of each rollout.")] = 1,
+    episodes: Annotated[int, typer.Option(
+        "--episodes",
+        metavar="N",
+        help="Episodes of each rollout.")] = 1,
     deterministic: Annotated[
         bool, typer.Option("--deterministic/--stochastic", help="Mean action or sampled action.")
     ] = True,
     set_: SetOpt = None,
     config: Annotated[
         Path | None,
-        typer.Option("--config", help="YAML whose sections override the run's config."),
+        typer.Option(
+            "--config",
+            metavar="FILE",
+            help="YAML whose sections override the run's config."),
     ] = None,
     model: Annotated[
         str,
         typer.Option(
             "--model",
+            metavar="best|final|DIR",
             help="best (falls back to final), final, or (RLlib) a checkpoint folder such as "
             "checkpoints/iter_000004.",
         ),

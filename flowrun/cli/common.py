@@ -52,11 +52,13 @@ SetOpt = Annotated[
     list[str] | None,
     typer.Option(
         "--set",
+        metavar="KEY=VALUE",
         help="Override a config value: a.b=value (read as a YAML scalar). Repeatable.",
     ),
 ]
 SeedOpt = Annotated[
-    int | None, typer.Option("--seed", help="Seed (overrides sim.seed and any --set of it).")
+    int | None,
+    typer.Option("--seed", metavar="N", help="Seed (overrides sim.seed and any --set of it)."),
 ]
 #: How the help of every ``--out`` starts: the option always names a folder.
 OUT_HELP = "Folder that receives"
@@ -66,6 +68,7 @@ def out_option(receives: str) -> Any:
     """The ``--out`` option, its help saying what the folder receives (``receives``)."""
     return typer.Option(
         "--out",
+        metavar="DIR",
         help=f"{OUT_HELP} {receives}; nothing in it is overwritten.",
         callback=expand_home,
     )
@@ -79,11 +82,14 @@ def expand_home(path: Path | None) -> Path | None:
 
 
 OutOpt = Annotated[Path, out_option("the run folders, OUT/<config name>/...")]
-ConfigArg = Annotated[Path, typer.Argument(help="Experiment YAML file.", show_default=False)]
+ConfigArg = Annotated[
+    Path, typer.Argument(help="Experiment YAML file.", metavar="CONFIG", show_default=False)
+]
 AnyConfigArg = Annotated[
     Path,
     typer.Argument(
         help="Experiment YAML file, or a Flow config module (.py defining flow_params).",
+        metavar="CONFIG",
         show_default=False,
     ),
 ]
