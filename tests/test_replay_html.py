@@ -184,3 +184,27 @@ def test_a_time_window_and_vehicles_select_what_the_page_plays(ring_log):
     data, _ = player_data(open_log(ring_log), 5.0, 10.0, chosen)
     assert data["times"][0] == pytest.approx(5.0) and data["times"][-1] == pytest.approx(10.0)
     assert sorted(data["vehicles"]["ids"]) == sorted(chosen)
+
+
+@pytest.mark.sumo
+@pytest.mark.skipif(_chromium() is None, reason="chromium is not installed (.ci/run installs it)")
+def test_browser_shows_the_chosen_cars_id_speed_leader_and_headway(ring_log, tmp_path):
+    page = tmp_path / "ring.html"
+    write_html(open_log(ring_log), page)
+    frame = next(f for f in open_log(ring_log).frames() if abs(f.time - 10.0) < 1e-6)
+    i = 3
+    vid = frame.ids[i]
+    profile = Path(tempfile.mkdtemp(dir=tmp_path))
+    cmd = [_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+           "--no-first-run", "--disable-background-networking", "--disable-component-update",
+           "--disable-sync", f"--user-data-dir={profile}", f"--window-size={WIDTH},{HEIGHT}",
+           "--dump-dom", f"{page.as_uri()}#t=10&car={vid}"]  # fmt: skip
+    dom = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False).stdout
+    panel = re.search(r'<div id="car">(.*?)</div>', dom, re.S)
+    assert panel is not None, dom[:500]
+    cells = dict(re.findall(r"<td>(.*?)</td><td>(.*?)</td>", panel.group(1)))
+    top = _page_data(page)["top"]
+    assert cells["id"] == vid
+    assert float(cells["speed"].split()[0]) == pytest.approx(frame.speed[i], abs=top / 250)
+    assert cells["leader"] == (frame.leader[i] or "none")
+    assert float(cells["headway"].split()[0]) == pytest.approx(frame.headway[i], abs=0.06)
