@@ -151,21 +151,27 @@ def plot_time_space(
         ax.legend(loc="upper right", markerscale=4)
     fig.colorbar(sc, ax=ax, label="Speed [m/s]")
     ax.set_xlabel("Time [s]")
-    if route is None:
-        ring = log.metadata.get("network_closed", "true") == "true"
-        ax.set_ylabel("Position on ring [m]" if ring else "Position in the network [m]")
-    else:
-        ax.set_ylabel(f"Position along {route.label} [m]")
-        ax.set_ylim(0.0, route.length)
-        for edge, start in route.edge_starts():
-            ax.axhline(start, color="grey", linewidth=0.6, linestyle=":")
-            ax.annotate(
-                edge, (0.0, start), xycoords=("axes fraction", "data"), xytext=(3, 2),
-                textcoords="offset points", fontsize="x-small", color="dimgrey",
-            )  # fmt: skip
+    _position_axis(ax, log, route)
     mark_warmup(ax, log)
     ax.set_title(f"Time-space diagram - {run_label(log)}")
     return _save(fig, out_png)
+
+
+def _position_axis(ax: Axes, log: McapLog, route: RouteLayout | None) -> None:
+    """Label the position axis: along ``route`` (dotted lines where its edges start), else
+    the ring or network position."""
+    if route is None:
+        ring = log.metadata.get("network_closed", "true") == "true"
+        ax.set_ylabel("Position on ring [m]" if ring else "Position in the network [m]")
+        return
+    ax.set_ylabel(f"Position along {route.label} [m]")
+    ax.set_ylim(0.0, route.length)
+    for edge, start in route.edge_starts():
+        ax.axhline(start, color="grey", linewidth=0.6, linestyle=":")
+        ax.annotate(
+            edge, (0.0, start), xycoords=("axes fraction", "data"), xytext=(3, 2),
+            textcoords="offset points", fontsize="x-small", color="dimgrey",
+        )  # fmt: skip
 
 
 def _top(speeds: np.ndarray) -> float:
