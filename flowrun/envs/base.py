@@ -88,6 +88,10 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - gymnasium's
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = {}
+    #: The experiment this env comes with, which ``gymnasium.make("flowrun/<Name>-v0")`` runs
+    #: without a config: a file of the repository's ``configs/`` folder (see
+    #: :func:`flowrun.envs.factory.default_experiment`); ``None``: Flow's ring task.
+    DEFAULT_EXPERIMENT: ClassVar[str | None] = None
 
     def __init__(
         self,

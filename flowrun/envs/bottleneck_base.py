@@ -205,6 +205,8 @@ class BottleneckEnv(Env):
     (:class:`TollBooth`, :class:`RampMeter`; each needs a traffic light on its node).
     """
 
+    DEFAULT_EXPERIMENT = "benchmarks/bottleneck0.yaml"
+
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:

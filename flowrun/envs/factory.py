@@ -1,4 +1,5 @@
-"""Build an environment from an :class:`ExperimentConfig` (or a YAML file)."""
+"""Build an environment from an :class:`ExperimentConfig` (or a YAML file), or from its name
+alone with the experiment the env comes with (:func:`default_experiment`)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from flowrun.config.loader import load_config, override_config
 from flowrun.config.model import ExperimentConfig, NetworkConfig
 from flowrun.config.params import (
     ControllerSpec,
@@ -113,6 +115,27 @@ def default_config(env_name: str) -> ExperimentConfig:
     )
 
 
+#: The repository's experiment files, which the envs' ``DEFAULT_EXPERIMENT`` names.
+CONFIGS_DIR = Path(__file__).resolve().parents[2] / "configs"
+
+
+def default_experiment(env_name: str) -> ExperimentConfig:
+    """The experiment a built-in env comes with (``gymnasium.make`` without a config).
+
+    The file its class names in ``DEFAULT_EXPERIMENT`` (a path under :data:`CONFIGS_DIR`),
+    with ``env.class`` set to ``env_name`` and the keys of the class's
+    ``ADDITIONAL_ENV_PARAMS`` the file lacks filled in; Flow's ring task
+    (:func:`default_config`) for a class that names none.
+    """
+    cls = resolve_env_class(env_name)
+    file = getattr(cls, "DEFAULT_EXPERIMENT", None)
+    if file is None:
+        return default_config(env_name)
+    cfg = load_config(CONFIGS_DIR / file)
+    params = {**getattr(cls, "ADDITIONAL_ENV_PARAMS", {}), **cfg.env.additional_params}
+    return replace(cfg, env=replace(cfg.env, env_class=env_name, additional_params=params))
+
+
 def make_registered(
     env_name: str,
     config: str | Path | ExperimentConfig | None = None,
@@ -124,20 +147,19 @@ def make_registered(
 
     Args:
         env_name: the registered env.
-        config: a YAML path or config; the env's default ring experiment when omitted.
+        config: a YAML path or config; the env's own experiment when omitted
+            (:func:`default_experiment`).
         overrides: ``a.b=value`` overrides, as ``--set`` on the command line.
         render_mode: ``None`` or ``"rgb_array"``.
         env_changes: ``EnvParams`` fields to replace, e.g. ``horizon=500``.
     """
-    from flowrun.config.loader import load_config, override_config
-
     if isinstance(config, ExperimentConfig):
         cfg = config
     elif config is not None:
         cfg = load_config(Path(config), overrides)
         overrides = ()
     else:
-        cfg = default_config(env_name)
+        cfg = default_experiment(env_name)
     if overrides:
         cfg = override_config(cfg, list(overrides))
     env_params = replace(cfg.env, env_class=cfg.env.env_class or env_name, **env_changes)

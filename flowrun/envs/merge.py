@@ -110,6 +110,8 @@ class MergePOEnv(Env):
     Termination: collision; truncation: horizon.
     """
 
+    DEFAULT_EXPERIMENT = "merge.yaml"  # Flow's merge0
+
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:

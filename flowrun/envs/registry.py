@@ -154,8 +154,8 @@ def _env_class(module: ModuleType, module_name: str, attr: str, name: str) -> ty
 def register_envs() -> None:
     """Register every built-in env as ``flowrun/<Name>-v0`` with Gymnasium (idempotent).
 
-    Without a ``config`` an env runs its default experiment
-    (:func:`flowrun.envs.defaults.make_with_default`).
+    Without a ``config`` an env runs the experiment it comes with
+    (:func:`flowrun.envs.factory.default_experiment`).
     """
     for name in sorted(_builtin()):  # the multi-agent envs are PettingZoo envs, not Gymnasium's
         env_id = f"flowrun/{name}-v0"
@@ -163,7 +163,7 @@ def register_envs() -> None:
             continue
         gymnasium.register(
             id=env_id,
-            entry_point="flowrun.envs.defaults:make_with_default",
+            entry_point="flowrun.envs.factory:make_registered",
             kwargs={"env_name": name},
             disable_env_checker=True,
         )

@@ -67,6 +67,8 @@ class TrafficLightGridEnv(Env):
     bring new ones.)
     """
 
+    DEFAULT_EXPERIMENT = "grid0.yaml"  # Flow's grid0
+
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
     @classmethod
