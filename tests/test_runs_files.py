@@ -111,6 +111,8 @@ def check_disk_full_run(out: Path, proc: subprocess.CompletedProcess[str], why: 
     assert status.state == "failed"
     assert status.error is not None and why in status.error
     assert not is_complete(folder)
+    metrics = folder / "metrics.json"  # never left saying "running" next to a failed status
+    assert not metrics.exists() or json.loads(metrics.read_text())["status"] == "failed"
     try:  # what reached the disk is readable, or refused in one clear error
         steps = [f.step for f in open_log(folder / "run_0.mcap").frames()]
         assert steps == list(range(len(steps)))

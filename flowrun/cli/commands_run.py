@@ -21,12 +21,14 @@ from flowrun.cli.common import (
     guarded,
     interrupt_between_steps,
     interrupted_exit,
+    interruption_of,
     load_located,
     overrides_with_seed,
     sigterm_as_interrupt,
 )
 from flowrun.cli.feedback import Feedback
 from flowrun.cli.tables import metrics_table, signals_table
+from flowrun.errors import FlowrunError
 
 __all__ = [  # the shared options, re-exported for the commands that import them from here
     "AnyConfigArg",
@@ -142,6 +144,13 @@ def baseline(
             raise interrupted_exit(
                 err, "logs finished; status.json and metrics.json say so"
             ) from None
+        except FlowrunError as err:
+            # A Ctrl-C to the process group also stops a tool running then (netconvert):
+            # its failure is the interruption.
+            stopped = interruption_of(check_stop)
+            if stopped is None:
+                raise
+            raise interrupted_exit(stopped, "status.json and metrics.json say so") from err
     title = f"{cfg.name}: {runs} run(s) x {total} steps"
     console.print(metrics_table(title, result.metrics, with_outflow=not result.signals))
     if result.signals:

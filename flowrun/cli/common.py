@@ -25,6 +25,7 @@ exit code 130 (SIGINT) or 143 (SIGTERM).
 
 from __future__ import annotations
 
+import errno
 import functools
 import io
 import signal
@@ -123,8 +124,26 @@ def guarded(fn: Callable[P, R]) -> Callable[P, R]:
         except FlowrunError as err:
             typer.secho(f"error: {one_line(str(err))}", err=True, fg=typer.colors.RED)
             raise typer.Exit(code=1) from None
+        except OSError as err:
+            if err.filename is None:  # not about a path the user gave: a real failure
+                raise
+            typer.secho(f"error: {path_problem(err)}", err=True, fg=typer.colors.RED)
+            raise typer.Exit(code=1) from None
 
     return wrapper
+
+
+def path_problem(err: OSError) -> str:
+    """One line for a file-system error on a path: which path, what, how to fix a name too
+    long (a folder or file name over 255 bytes, the limit of Linux file systems)."""
+    path = str(err.filename)
+    if err.errno == errno.ENAMETOOLONG:
+        longest = max(len(part.encode()) for part in Path(path).parts)
+        return (
+            f"{path}: file name too long (a part of it is {longest} bytes; file systems "
+            "allow 255): use a shorter name"
+        )
+    return f"{path}: {err.strerror}"
 
 
 def load_located(config: Path, overrides: list[str]) -> tuple[ExperimentConfig, Locations]:
@@ -214,6 +233,16 @@ def interrupt_between_steps() -> Iterator[Callable[[], None]]:
 
     with on_stop_signals(handler):
         yield check
+
+
+def interruption_of(check_stop: Callable[[], None]) -> KeyboardInterrupt | None:
+    """The interruption ``check_stop`` (from :func:`interrupt_between_steps`) raises, or
+    ``None`` when no signal came."""
+    try:
+        check_stop()
+    except KeyboardInterrupt as err:
+        return err
+    return None
 
 
 def interrupted_exit(err: KeyboardInterrupt, message: str) -> typer.Exit:

@@ -37,9 +37,16 @@ COMMANDS: dict[str, tuple[str, str]] = {
 
 
 def load_commands(module: str) -> dict[str, Any]:
-    """The click commands that ``flowrun.cli.<module>``'s ``register`` adds to an app."""
+    """The click commands that ``flowrun.cli.<module>``'s ``register`` adds to an app (a
+    dotted ``module`` is a full module path). Ctrl-C while it is imported (the heavy part of
+    starting a command) exits 130 with one line, no traceback."""
     sub = typer.Typer(rich_markup_mode=None)
-    importlib.import_module(f"flowrun.cli.{module}").register(sub)
+    try:
+        found = importlib.import_module(module if "." in module else f"flowrun.cli.{module}")
+    except KeyboardInterrupt:
+        typer.echo("interrupted", err=True)
+        raise typer.Exit(code=130) from None
+    found.register(sub)
     return dict(typer.main.get_group(sub).commands)
 
 

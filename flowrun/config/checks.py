@@ -261,6 +261,11 @@ def _name(value: Any) -> str | None:
         return "must not be empty"
     if any(c in value for c in "/\\") or value in (".", ".."):
         return f"names the run folder, so it must not contain '/' or '\\', got {value!r}"
+    if any(c in value for c in ",:"):
+        return (
+            f"names the run folder, and SUMO's tools read ',' and ':' in a file path as a "
+            f"list or a host:port, so it must not contain them, got {value!r}"
+        )
     if not value.isprintable() or len(value) > MAX_NAME:
         return (
             f"names the run folder, so it must be printable text of at most {MAX_NAME} "

@@ -243,10 +243,7 @@ def _run(
         except Exception as again:  # SUMO may be gone already: report what stopped the run
             log.info("closing the environment failed too: %s", again)
         status = INTERRUPTED if isinstance(err, KeyboardInterrupt) else FAILED
-        try:
-            write_json(run_dir / "metrics.json", summary(status))
-        except OSError as again:  # the disk is full: tracked_run reports the first error
-            log.info("metrics.json not written: %s", again)
+        _write_final_metrics(run_dir / "metrics.json", summary(status))
         raise
     env.close()
     write_json(run_dir / "metrics.json", summary(COMPLETE))
@@ -283,6 +280,19 @@ class _Film:
         if not self.shots:
             return None
         return write_animation(stem, draw_run(self.road, self.shots, self.lengths), fps=10.0)
+
+
+def _write_final_metrics(path: Path, data: dict[str, Any]) -> None:
+    """Write how a run that stopped ended; on a full disk, never leave a metrics.json that
+    still says ``running``: remove it (which frees its room) and try again; if even that
+    fails, there is no metrics.json and status.json tells (tracked_run reports the error)."""
+    try:
+        write_json(path, data)
+    except OSError as again:
+        log.info("metrics.json not written: %s; removing the stale one", again)
+        with suppress(OSError):
+            path.unlink()
+            write_json(path, data)
 
 
 class _Bookkeeping:

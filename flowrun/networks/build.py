@@ -9,6 +9,7 @@ checked and used as is.
 from __future__ import annotations
 
 import hashlib
+import signal
 import subprocess
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -156,6 +157,8 @@ def build_network(spec: NetworkSpec, out_dir: Path, name: str = "network") -> Pa
     )
     if proc.returncode != 0 or not tmp.exists():
         message = (proc.stderr or proc.stdout).strip()
+        if proc.returncode < 0:  # killed: Ctrl-C or SIGTERM to the process group, the OOM killer
+            message = f"stopped by {signal.Signals(-proc.returncode).name}"
         raise SimulationError(f"netconvert failed on {files['edg']}: {message}")
     tmp.replace(net_file)
     return net_file

@@ -175,15 +175,21 @@ def check_out_dir(out: Path) -> None:
 
 def check_sumo_path(path: Path, what: str) -> None:
     """Refuse a folder SUMO cannot take files from: its file options (``--route-files``,
-    netconvert's inputs) split at ``,``, so ``runs,old/`` would be read as two paths.
+    netconvert's inputs) split at ``,``, so ``runs,old/`` would be read as two paths, and
+    netconvert reads ``a:b`` in an output path as a host and port.
 
     Raises:
-        FlowrunError: ``path`` holds a ``,``.
+        FlowrunError: ``path`` holds a ``,`` or a ``:``.
     """
     if "," in str(path):
         raise FlowrunError(
             f"{what} {path}: SUMO reads ',' in a file path as a list separator; "
             "choose a folder without ','"
+        )
+    if ":" in str(path):
+        raise FlowrunError(
+            f"{what} {path}: SUMO's netconvert reads 'a:b' in a file path as host:port; "
+            "choose a folder without ':'"
         )
 
 
