@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -101,3 +102,49 @@ def test_ctrl_c_while_netconvert_runs_is_an_interruption(
     result = CliRunner().invoke(app, ["baseline", str(SUGIYAMA), "--out", str(tmp_path)])
     assert result.exit_code == 130, result.output
     assert result.stderr.startswith("interrupted: ")
+
+
+CONSTANT = '''
+from flowrun.controllers import BaseController
+
+
+class Constant(BaseController):
+    def __init__(self, veh_id, car_following_params, accel=0.5, fail_safe=None, noise=0):
+        super().__init__(veh_id, car_following_params, fail_safe=fail_safe, noise=noise)
+        self.accel = accel
+
+    def get_accel(self, env):
+        return self.accel
+'''
+
+
+@pytest.mark.sumo
+def test_a_controller_module_beside_the_config_is_found(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = tmp_path / "exp"
+    folder.mkdir()
+    (folder / "my_drivers_near.py").write_text(CONSTANT)
+    config = folder / "c.yaml"
+    config.write_text(SUGIYAMA.read_text().replace(
+        "{type: IDM, v0: 30, T: 1, a: 1, b: 1.5, delta: 4, s0: 2, noise: 0}",
+        "{type: 'my_drivers_near:Constant'}",
+    ))  # fmt: skip
+    assert "my_drivers_near:Constant" in config.read_text()
+    monkeypatch.chdir(tmp_path)  # not the config's folder
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    result = CliRunner().invoke(app, ["baseline", str(config), "--steps", "20", "--out",
+                                      str(tmp_path / "o")])  # fmt: skip
+    sys.modules.pop("my_drivers_near", None)
+    assert result.exit_code == 0, result.output
+    (metrics,) = (tmp_path / "o").glob("*/*/metrics.json")
+    assert '"collisions": 0' in metrics.read_text()
+
+
+def test_a_missing_controller_module_says_where_to_put_it(tmp_path: Path) -> None:
+    config = tmp_path / "c.yaml"
+    config.write_text(SUGIYAMA.read_text().replace(
+        "acceleration_controller: {type: IDM", "acceleration_controller: {type: 'nowhere_mod:X'"
+    ))  # fmt: skip
+    line = one_error_line(CliRunner().invoke(app, ["validate", str(config)]), "nowhere_mod")
+    assert "next to the config file" in line and "run from its folder" not in line

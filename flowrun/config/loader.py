@@ -29,6 +29,7 @@ from flowrun.config.overrides import apply_overrides
 from flowrun.config.params import VehicleType
 from flowrun.config.yamlio import KeyPath, Locations, format_path, parse_yaml
 from flowrun.errors import ConfigError, FlowrunError
+from flowrun.import_path import import_near
 from flowrun.suggest import did_you_mean
 
 # Controller fields of a vehicle group and the controller kind each one takes.
@@ -202,6 +203,10 @@ def _check_controllers(cfg: ExperimentConfig, data: Mapping[str, Any], loc: Loca
             at: KeyPath = ("vehicles", i, name)
             given = raw.get(name) if isinstance(raw, Mapping) else None
             try:
+                if ":" in spec.type:  # a user's module:Class, found beside the config too
+                    module_name = spec.type.partition(":")[0]
+                    if module_name:
+                        import_near(module_name, spec.type, _search_dir(loc), "controller", "")
                 if resolve is not None:
                     resolve(spec.type, kind)
             except ConfigError as err:

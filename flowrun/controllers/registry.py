@@ -149,8 +149,8 @@ def _import_path(name: str) -> type[Any]:
         module = importlib.import_module(module_name)
     except ImportError as exc:
         raise ConfigError(
-            f"cannot import module '{module_name}' for controller '{name}': {exc}; check that "
-            "the module is on the Python path (e.g. run from its folder)"
+            f"cannot import module '{module_name}' for controller '{name}': {exc}; put it "
+            "next to the config file, install it, or add its folder to PYTHONPATH"
         ) from exc
     obj: Any = module
     for part in attr.split("."):
