@@ -77,7 +77,8 @@ def test_sugiyama_yaml_loads_into_flow_parameter_objects(tmp_path: Path) -> None
 def test_omitted_sections_are_flow_defaults_and_name_defaults_to_file_stem(
     tmp_path: Path,
 ) -> None:
-    cfg = load_config(write(tmp_path, "vehicles: [{id: a, count: 2}]\n", name="ring_wave.yaml"))
+    text = "network: {type: ring}\nvehicles: [{id: a, count: 2}]\n"
+    cfg = load_config(write(tmp_path, text, name="ring_wave.yaml"))
     assert cfg == ExperimentConfig(
         name="ring_wave", vehicles=VehicleParams([VehicleType("a", num_vehicles=2)])
     )
@@ -94,7 +95,7 @@ def test_an_empty_config_file_is_refused_with_its_name(tmp_path: Path) -> None:
 def test_empty_section_means_defaults_but_empty_train_means_no_training(
     tmp_path: Path,
 ) -> None:
-    cfg = load_config(write(tmp_path, "name: x\nsim:\nenv:\ntrain:\n"))
+    cfg = load_config(write(tmp_path, "name: x\nsim:\nenv:\ntrain:\nnetwork: {type: ring}\n"))
     assert cfg == ExperimentConfig(name="x")
 
 
@@ -104,6 +105,7 @@ def test_field_names_are_accepted_where_yaml_keys_differ(tmp_path: Path) -> None
             tmp_path,
             """\
             name: x
+            network: {type: ring}
             sim: {sim_step: 0.2}
             env: {env_class: my_envs:MyEnv}
             vehicles:
@@ -123,6 +125,7 @@ def test_bare_controller_name_and_inf_and_int_for_float(tmp_path: Path) -> None:
             tmp_path,
             """\
             name: x
+            network: {type: ring}
             sim: {step: 1}
             env: {horizon: .inf}
             initial: {lanes_distribution: .inf}
@@ -141,6 +144,7 @@ def test_train_section_keeps_hyperparams_and_policy_kwargs_free(tmp_path: Path) 
             tmp_path,
             """\
             name: x
+            network: {type: ring}
             train:
               algorithm: PPO
               total_timesteps: 5000
@@ -157,7 +161,7 @@ def test_train_section_keeps_hyperparams_and_policy_kwargs_free(tmp_path: Path) 
 
 
 def test_config_from_dict_uses_the_same_schema() -> None:
-    cfg = config_from_dict({"name": "x", "sim": {"step": 0.5}})
+    cfg = config_from_dict({"name": "x", "sim": {"step": 0.5}, "network": {"type": "ring"}})
     assert cfg == ExperimentConfig(name="x", sim=SumoParams(sim_step=0.5))
     with pytest.raises(ConfigError) as info:
         config_from_dict({"name": "x", "sim": {"stpe": 0.5}}, source="flow_params")
@@ -263,7 +267,8 @@ def test_missing_required_vehicle_id(tmp_path: Path) -> None:
             "expected an integer, got true",
         ),
         ("name: x\nsim:\n  step: fast\n", 3, "sim.step", "expected a number, got 'fast'"),
-        ("name: x\nsim:\n  render: 1\n", 3, "sim.render", "expected true or false, got 1"),
+        ("name: x\nsim:\n  render: 1\n", 3, "sim.render",
+         "expected true or false or a string, got 1"),
         ("name: x\nsim: [1, 2]\n", 2, "sim", "expected a mapping of settings, got a list"),
         ("name: x\nvehicles: {id: a}\n", 2, "vehicles", "expected a list of vehicle groups"),
         (
@@ -356,7 +361,8 @@ def test_impossible_value_is_located(
 
 def test_int_speed_mode_is_accepted(tmp_path: Path) -> None:
     cfg = load_config(
-        write(tmp_path, "name: x\nvehicles: [{id: a, car_following: {speed_mode: 7}}]\n")
+        write(tmp_path, "name: x\nnetwork: {type: ring}\n"
+              "vehicles: [{id: a, car_following: {speed_mode: 7}}]\n")
     )
     assert cfg.vehicles.groups[0].car_following_params.speed_mode == 7
 
@@ -390,7 +396,8 @@ def test_yaml_anchors_and_merge_keys_work(tmp_path: Path) -> None:
     cfg = load_config(
         write(
             tmp_path,
-            "name: x\nvehicles:\n  - &h {id: a, count: 2}\n  - {<<: *h, id: b}\n",
+            "name: x\nnetwork: {type: ring}\nvehicles:\n  - &h {id: a, count: 2}\n"
+            "  - {<<: *h, id: b}\n",
         )
     )
     assert [(g.veh_id, g.num_vehicles) for g in cfg.vehicles.groups] == [("a", 2), ("b", 2)]

@@ -113,5 +113,5 @@ def test_more_cars_than_fit_on_the_ring(tmp_path: Path) -> None:
 
 def test_env_class_is_not_imported_at_load_time(tmp_path: Path) -> None:
     path = tmp_path / "exp.yaml"
-    path.write_text("name: x\nenv: {class: 'my_envs:MyEnv'}\n")
+    path.write_text("name: x\nnetwork: {type: ring}\nenv: {class: 'my_envs:MyEnv'}\n")
     assert load_config(path).env.env_class == "my_envs:MyEnv"

@@ -295,7 +295,8 @@ def test_yaml_mode_names_load_as_ints_and_are_written_back_as_names(tmp_path: Pa
 
     path = tmp_path / "x.yaml"
     path.write_text(
-        "name: x\nvehicles:\n  - id: a\n    car_following: {speed_mode: aggressive}\n"
+        "name: x\nnetwork: {type: ring}\n"
+        "vehicles:\n  - id: a\n    car_following: {speed_mode: aggressive}\n"
         "    lane_change: {lane_change_mode: 1621}\n"
         "  - id: b\n    car_following: {speed_mode: 9}\n"
     )

@@ -150,6 +150,12 @@ def _build(data: dict[str, Any], loc: Locations) -> ExperimentConfig:
     cfg: ExperimentConfig = Converter(loc).section(ExperimentConfig, data, ())
     _check_group_ids(cfg, data, loc)
     _check_controllers(cfg, data, loc)
+    if not data.get("network"):  # a default ring would run another experiment unnoticed
+        raise loc.error(
+            "the config has no network: section; give the road, e.g. "
+            "network: {type: ring, length: 230} (flowrun list networks shows every type)",
+            ("network",),
+        )
     _check_network(cfg, loc)
     network = _build_network(cfg, loc)
     edges = None if network is None else [edge.id for edge in network.spec.edges]

@@ -43,6 +43,7 @@ from flowrun.kernel.network import NetworkKernel
 from flowrun.kernel.ring_reader import ring_fast_path
 from flowrun.kernel.sumo import gui_available
 from flowrun.networks.base import Network
+from flowrun.suggest import one_edit_apart
 
 log = logging.getLogger(__name__)
 #: luminance weights of R, G, B (ITU-R BT.601): the grey of Flow's gray/dgray render modes
@@ -50,8 +51,17 @@ GREY = np.array([0.299, 0.587, 0.114])
 
 
 def check_additional_params(cls: type, env_params: EnvParams) -> None:
-    """Report every key of ``cls.ADDITIONAL_ENV_PARAMS`` missing from ``env_params``."""
+    """Report a key one edit off a declared one (a typo: Flow's other keys are free-form),
+    then every key of ``cls.ADDITIONAL_ENV_PARAMS`` missing from ``env_params``."""
     declared = getattr(cls, "ADDITIONAL_ENV_PARAMS", {}) or {}
+    for key in env_params.additional_params:
+        near = [k for k in declared if key not in declared and one_edit_apart(str(key), k)]
+        if near:
+            raise ConfigError(
+                f"unknown parameter of {cls.__name__} (did you mean '{near[0]}'?); keys it "
+                "does not declare are passed on as they are, but this one looks like a typo",
+                path=f"env.additional_params.{key}",
+            )
     missing = [k for k in declared if k not in env_params.additional_params]
     if missing:
         keys = ", ".join(f"'{k}' (default there: {declared[k]!r})" for k in missing)

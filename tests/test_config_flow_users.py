@@ -1,0 +1,72 @@
+"""Two mistakes a user makes in flowrun's YAML that used to run silently: a key of
+``env.additional_params`` one letter off a parameter the env declares (refused with a
+did-you-mean; other undeclared keys stay accepted, as Flow treats them as free-form), and a
+config without its ``network:`` section (an error, not a ring)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from flowrun.cli.main import app
+from flowrun.config.loader import load_config
+from flowrun.config.preflight import validate_config
+from flowrun.errors import ConfigError
+from flowrun.suggest import one_edit_apart
+
+ROOT = Path(__file__).resolve().parent.parent
+SUGIYAMA = (ROOT / "configs" / "sugiyama.yaml").read_text()
+FIGURE_EIGHT = (ROOT / "configs" / "figure_eight.yaml").read_text()
+
+
+def line_of(text: str, needle: str) -> int:
+    return next(i for i, line in enumerate(text.splitlines(), 1) if needle in line)
+
+
+@pytest.mark.parametrize(
+    ("a", "b", "close"),
+    [("target_velocty", "target_velocity", True), ("max_acel", "max_accel", True),
+     ("max_dcel", "max_decel", True), ("mxa_accel", "max_accel", True),
+     ("max_accel", "max_accel", False), ("max_accel", "max_decel", False),
+     ("target", "target_velocity", False)],
+)  # fmt: skip
+def test_one_edit_apart(a: str, b: str, close: bool) -> None:
+    assert one_edit_apart(a, b) is close and one_edit_apart(b, a) is close
+
+
+def test_a_key_one_edit_off_a_declared_parameter_is_refused_at_its_line(tmp_path: Path) -> None:
+    assert "target_velocity: 10" in SUGIYAMA
+    text = SUGIYAMA.replace("target_velocity: 10", "target_velocty: 99")
+    path = tmp_path / "typo.yaml"
+    path.write_text(text)
+    with pytest.raises(ConfigError) as info:
+        validate_config(path)
+    err = info.value
+    assert err.path == "env.additional_params.target_velocty"
+    assert err.location == f"{path}:{line_of(text, 'target_velocty')}"
+    assert "did you mean 'target_velocity'" in err.message
+    out = CliRunner().invoke(app, ["baseline", str(path), "--out", str(tmp_path / "runs")])
+    assert out.exit_code == 1 and "did you mean 'target_velocity'" in out.output
+    assert not (tmp_path / "runs").exists()
+
+
+def test_other_undeclared_keys_stay_free_form(tmp_path: Path) -> None:
+    path = tmp_path / "free.yaml"
+    path.write_text(SUGIYAMA.replace("target_velocity: 10", "target_velocity: 10, my_weight: 3"))
+    assert validate_config(path).env.additional_params["my_weight"] == 3
+
+
+def test_a_config_without_network_is_an_error_not_a_ring(tmp_path: Path) -> None:
+    start = FIGURE_EIGHT.index("network:")
+    end = FIGURE_EIGHT.index("\n", start)
+    while FIGURE_EIGHT[end + 1] == " ":  # the section's indented lines
+        end = FIGURE_EIGHT.index("\n", end + 1)
+    path = tmp_path / "no_network.yaml"
+    path.write_text(FIGURE_EIGHT[:start] + FIGURE_EIGHT[end + 1 :])
+    with pytest.raises(ConfigError, match="no network: section") as info:
+        load_config(path)
+    assert info.value.location.startswith(str(path)) and info.value.path == "network"
+    out = CliRunner().invoke(app, ["baseline", str(path), "--out", str(tmp_path / "runs")])
+    assert out.exit_code == 1 and len(out.output.strip().splitlines()) == 1
