@@ -35,6 +35,7 @@ from flowrun.controllers.car_following_formulas import (
     linear_ovm_accel,
     ovm_accel,
 )
+from flowrun.controllers.i210_router import I210Router
 from flowrun.controllers.lane_change import (
     LaneChangeController,
     SimLaneChangeController,
@@ -75,6 +76,7 @@ __all__ = [
     "FollowerStopper",
     "GippsController",
     "GridRouter",
+    "I210Router",
     "IDMController",
     "LACController",
     "LaneChangeController",

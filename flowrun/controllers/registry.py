@@ -24,6 +24,7 @@ from flowrun.controllers.car_following import (
     LinearOVM,
     OVMController,
 )
+from flowrun.controllers.i210_router import I210Router
 from flowrun.controllers.lane_change import (
     LaneChangeController,
     SimLaneChangeController,
@@ -68,6 +69,7 @@ _BUILTIN: tuple[type, ...] = (
     ContinuousRouter,
     GridRouter,
     MinicityRouter,
+    I210Router,
     SimLaneChangeController,
     StaticLaneChanger,
 )
