@@ -42,9 +42,9 @@ def test_controller_names_by_kind() -> None:
     assert accel[:3] == ["IDM", "OVM", "LinearOVM"]
     assert {"BCM", "BandoFTL", "Gipps", "LAC", "FollowerStopper", "PISaturation"} <= set(accel)
     assert {"RLController", "SimCarFollowingController"} <= set(accel)
-    assert controller_names("routing") == ["ContinuousRouter", "GridRouter", "MinicityRouter"]
+    routers = ["ContinuousRouter", "GridRouter", "MinicityRouter", "I210Router"]
+    assert controller_names("routing") == routers
     assert controller_names("lane_change") == ["SimLaneChangeController", "StaticLaneChanger"]
-    routers = ["ContinuousRouter", "GridRouter", "MinicityRouter"]
     assert controller_names() == [*accel, *routers, *controller_names("lane_change")]
 
 
