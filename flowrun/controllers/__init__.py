@@ -42,6 +42,7 @@ from flowrun.controllers.lane_change import (
     StaticLaneChanger,
 )
 from flowrun.controllers.minicity_router import MinicityRouter
+from flowrun.controllers.nonlocal_follower_stopper import NonLocalFollowerStopper
 from flowrun.controllers.registry import (
     build_controller,
     controller_kind,
@@ -82,6 +83,7 @@ __all__ = [
     "LaneChangeController",
     "LinearOVM",
     "MinicityRouter",
+    "NonLocalFollowerStopper",
     "OVMController",
     "PISaturation",
     "RLController",

@@ -31,6 +31,7 @@ from flowrun.controllers.lane_change import (
     StaticLaneChanger,
 )
 from flowrun.controllers.minicity_router import MinicityRouter
+from flowrun.controllers.nonlocal_follower_stopper import NonLocalFollowerStopper
 from flowrun.controllers.params import Param, parameters
 from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.controllers.rl import RLController, SimCarFollowingController
@@ -63,6 +64,7 @@ _BUILTIN: tuple[type, ...] = (
     GippsController,
     LACController,
     FollowerStopper,
+    NonLocalFollowerStopper,
     PISaturation,
     SimCarFollowingController,
     RLController,
