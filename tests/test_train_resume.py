@@ -53,7 +53,7 @@ def stopped_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_stopped_run_says_interrupted_and_times_its_parts(stopped_run: Path) -> None:
     metrics = json.loads((stopped_run / "metrics.json").read_text())
-    assert metrics["status"] == "interrupted"
+    assert metrics["status"] == "interrupted" and metrics["partial"] is True
     assert run_state(stopped_run) == "interrupted"
     assert metrics["timesteps"] == 600
     timing = metrics["timing"]
@@ -76,6 +76,7 @@ def test_resume_keeps_monitor_files_evaluations_and_the_best_model(stopped_run: 
     history.last_half_speed[-1] = [99.0]
     history.save(history_path)
     best = (stopped_run / "best_model.zip").read_bytes()
+    first_part = (stopped_run / "metrics.json").read_text()
     monitors = {p.name: p.read_text() for p in (stopped_run / "monitor").glob("*.csv")}
     assert monitors
 
@@ -97,6 +98,10 @@ def test_resume_keeps_monitor_files_evaluations_and_the_best_model(stopped_run: 
         assert kept.read_text() == text
     assert len(list((stopped_run / "monitor").glob("*.csv"))) == 2 * len(monitors)
     assert run_state(stopped_run) == "complete"
+    # the earlier part's metrics (its timing) are kept; metrics.json is the resumed part's
+    assert (stopped_run / "metrics.before_600.json").read_text() == first_part
+    resumed = json.loads((stopped_run / "metrics.json").read_text())
+    assert resumed["status"] == "complete" and resumed["partial"] is False
 
 
 def test_numpy_policy_matches_sb3_predict() -> None:

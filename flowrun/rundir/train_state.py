@@ -62,10 +62,11 @@ def read_metrics(run_dir: Path) -> dict[str, Any] | None:
 
 
 def write_status(run_dir: Path, status: str, **fields: Any) -> None:
-    """Write ``metrics.json`` with ``status`` and ``fields`` (atomically)."""
+    """Write ``metrics.json`` with ``status`` and ``fields`` (atomically); ``partial`` says
+    whether the numbers cover less than the whole run (any status but ``complete``)."""
     if status not in STATUSES:
         raise ValueError(f"status must be one of {STATUSES}, got {status!r}")
-    write_json(run_dir / METRICS, {"status": status, **fields})
+    write_json(run_dir / METRICS, {"status": status, "partial": status != "complete", **fields})
 
 
 def run_state(run_dir: Path) -> str:

@@ -224,7 +224,7 @@ def run_evaluation(
     (out_dir / "config.yaml").write_text(dump_config(cfg))
     head = {"seed": seed, "run": str(run_dir), "model": str(model), "run_status": run_status,
             **head}  # fmt: skip
-    write_json(out_dir / "metrics.json", {"status": "running", **head})
+    write_json(out_dir / "metrics.json", {"status": "running", "partial": True, **head})
     mark_running(out_dir)
     logs: list[Path] = []
     try:
@@ -232,21 +232,20 @@ def run_evaluation(
         human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs,
                          progress)  # fmt: skip
     except KeyboardInterrupt as err:
-        write_json(out_dir / "metrics.json",
-                   {"status": "interrupted", **head, "logs": [p.name for p in logs]})
+        write_json(out_dir / "metrics.json", _stopped(head, logs))
         mark_done(out_dir, "interrupted", exit_code=exit_code_of(err))
         raise
     except Exception as err:
         if should_stop is not None and should_stop():
-            write_json(out_dir / "metrics.json",
-                       {"status": "interrupted", **head, "logs": [p.name for p in logs]})
+            write_json(out_dir / "metrics.json", _stopped(head, logs))
             mark_done(out_dir, "interrupted", exit_code=_stop_exit_code(should_stop),
                       error=f"after the stop signal: {type(err).__name__}: {err}")  # fmt: skip
         else:
             mark_done(out_dir, "failed", error=f"{type(err).__name__}: {err}", exit_code=1)
         raise
     result = EvalResult(out_dir, model, rl, human, logs, run_status)
-    write_json(out_dir / "metrics.json", {"status": "complete", **head, **result.to_dict()})
+    write_json(out_dir / "metrics.json",
+               {"status": "complete", "partial": False, **head, **result.to_dict()})
     mark_done(out_dir, "complete", exit_code=0)
     return result
 
@@ -299,3 +298,8 @@ def _rollout(
     finally:
         env.close()
     return list(experiment.metrics)
+
+
+def _stopped(head: dict[str, Any], logs: list[Path]) -> dict[str, Any]:
+    """``metrics.json`` of an evaluation stopped by Ctrl-C/SIGTERM: what it had, partial."""
+    return {"status": "interrupted", "partial": True, **head, "logs": [p.name for p in logs]}

@@ -1,7 +1,8 @@
 """``--resume``: continue a run folder from its last checkpoint without overwriting anything.
 
 Kept across a resume: the earlier config (renamed ``config.before_<steps>.yaml`` when it
-changes), the command lines (appended), the monitor CSVs (renamed
+changes), the earlier ``metrics.json`` (copied to ``metrics.before_<steps>.json``: its timing
+and results), the command lines (appended), the monitor CSVs (renamed
 ``env_<i>.before_<steps>.monitor.csv``, still found by SB3's ``load_results``), the evaluation
 history and the best model with its score (:mod:`flowrun.training.periodic_eval`).
 """
@@ -9,6 +10,7 @@ history and the best model with its score (:mod:`flowrun.training.periodic_eval`
 from __future__ import annotations
 
 import shlex
+import shutil
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -62,10 +64,14 @@ def _never_trained(run_dir: Path) -> bool:
 def note_resume(
     run_dir: Path, cfg: ExperimentConfig, state: dict[str, Any], argv: list[str] | None
 ) -> None:
-    """Append the command line; keep the earlier config if the resumed one differs."""
+    """Append the command line; keep the earlier config if the resumed one differs, and the
+    earlier ``metrics.json`` (its timing) as ``metrics.before_<steps>.json``."""
     command = argv if argv is not None else sys.argv
     with (run_dir / "command.txt").open("a") as f:
         f.write(shlex.join(command) + "\n")
+    metrics = run_dir / "metrics.json"
+    if metrics.is_file():
+        shutil.copyfile(metrics, _free(run_dir / f"metrics.before_{state['timesteps']}.json"))
     text = dump_config(cfg)
     current = run_dir / "config.yaml"
     if current.read_text() != text:

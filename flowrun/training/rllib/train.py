@@ -359,6 +359,7 @@ def _write_metrics(
         run_dir / "metrics.json",
         {
             "status": status,
+            "partial": status != "complete",
             "backend": "rllib",
             "config": cfg.name,
             "seed": seed,
