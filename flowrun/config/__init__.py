@@ -1,4 +1,10 @@
-"""Typed, validated experiment configuration (the YAML file and Flow's parameter objects)."""
+"""Typed, validated experiment configuration (the YAML file and Flow's parameter objects).
+
+Also Flow's ``flow.config`` settings that still mean something: :data:`PROJECT_PATH` (the
+folder holding the package) and :data:`LOG_DIR` (``PROJECT_PATH/data``).
+"""
+
+from pathlib import Path as _Path
 
 from flowrun.config.model import ExperimentConfig, NetworkConfig, TrainConfig
 from flowrun.config.params import (
@@ -17,6 +23,8 @@ from flowrun.config.params import (
 )
 
 __all__ = [
+    "LOG_DIR",
+    "PROJECT_PATH",
     "ControllerSpec",
     "EnvParams",
     "ExperimentConfig",
@@ -38,3 +46,8 @@ from flowrun.config.dump import config_to_dict, dump_config
 from flowrun.config.loader import config_from_dict, load_config
 
 __all__ += ["config_from_dict", "config_to_dict", "dump_config", "load_config"]
+
+#: the folder that holds the ``flowrun`` package (Flow's ``flow.config.PROJECT_PATH``)
+PROJECT_PATH = str(_Path(__file__).resolve().parents[2])
+#: Flow's default data folder, ``PROJECT_PATH/data``
+LOG_DIR = PROJECT_PATH + "/data"
