@@ -28,12 +28,13 @@ from flowrun.config.model import ExperimentConfig
 from flowrun.config.overrides import apply_overrides
 from flowrun.config.params import VehicleType
 from flowrun.config.yamlio import KeyPath, Locations, format_path, parse_yaml
+from flowrun.controllers.registry import ControllerKind, build_controller, resolve_controller
 from flowrun.errors import ConfigError, FlowrunError
 from flowrun.import_path import import_near
 from flowrun.suggest import did_you_mean
 
 # Controller fields of a vehicle group and the controller kind each one takes.
-_CONTROLLER_FIELDS = {
+_CONTROLLER_FIELDS: dict[str, ControllerKind] = {
     "acceleration_controller": "acceleration",
     "lane_change_controller": "lane_change",
     "routing_controller": "routing",
@@ -198,8 +199,6 @@ def _check_group_ids(cfg: ExperimentConfig, data: Mapping[str, Any], loc: Locati
 
 
 def _check_controllers(cfg: ExperimentConfig, data: Mapping[str, Any], loc: Locations) -> None:
-    resolve = optional("flowrun.controllers.registry", "resolve_controller")
-    build = optional("flowrun.controllers.registry", "build_controller")
     for i, group in enumerate(cfg.vehicles.groups):
         raw = _raw_group(data, i)
         for name, kind in _CONTROLLER_FIELDS.items():
@@ -213,14 +212,12 @@ def _check_controllers(cfg: ExperimentConfig, data: Mapping[str, Any], loc: Loca
                     module_name = spec.type.partition(":")[0]
                     if module_name:
                         import_near(module_name, spec.type, _search_dir(loc), "controller", "")
-                if resolve is not None:
-                    resolve(spec.type, kind)
+                resolve_controller(spec.type, kind)
             except ConfigError as err:
                 type_at = (*at, "type") if isinstance(given, Mapping) else at
                 raise loc.error(err.message, type_at) from None
             try:
-                if build is not None:
-                    build(spec.type, dict(spec.params), kind)
+                build_controller(spec.type, dict(spec.params), kind)
             except ConfigError as err:
                 raise loc.error(err.message, (*at, *_param_path(err, spec.params))) from None
 
