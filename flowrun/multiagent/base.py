@@ -20,6 +20,7 @@ from pettingzoo import ParallelEnv
 from flowrun.envs.base import Env
 from flowrun.envs.ring.accel import acceleration_box
 from flowrun.multiagent.agents import possible_agent_ids
+from flowrun.multiagent.flow_spaces import FlowSpace, callable_space
 from flowrun.multiagent.observations import NEIGHBOUR_HIGH, NEIGHBOUR_LOW
 
 log = logging.getLogger(__name__)
@@ -60,7 +61,9 @@ class MultiAgentEnv(Env, ParallelEnv[str, Obs, Action]):
     Subclasses implement the two space properties, :meth:`get_state` (observations of
     :attr:`agents`) and :meth:`compute_reward` (one shared float or a float per agent); the
     default :meth:`_apply_rl_actions` applies each agent's first action value as an
-    acceleration.
+    acceleration. Written Flow's way, a subclass defines ``observation_space`` and
+    ``action_space`` as properties instead: they then read both as Flow's properties and as
+    PettingZoo's methods (``env.observation_space`` and ``env.observation_space(agent)``).
     """
 
     metadata = {  # noqa: RUF012 - PettingZoo's and Gymnasium's name
@@ -83,7 +86,8 @@ class MultiAgentEnv(Env, ParallelEnv[str, Obs, Action]):
         )
         self._possible = frozenset(self.possible_agents)
         self.agents: list[str] = []
-        obs_space, act_space = self.agent_observation_space, self.agent_action_space
+        obs_space = callable_space(self.agent_observation_space)
+        act_space = callable_space(self.agent_action_space)
         self.observation_spaces = dict.fromkeys(self.possible_agents, obs_space)
         self.action_spaces = dict.fromkeys(self.possible_agents, act_space)
         self._obs_space, self._act_space = obs_space, act_space
@@ -91,6 +95,20 @@ class MultiAgentEnv(Env, ParallelEnv[str, Obs, Action]):
         self._warned: set[str] = set()
         #: whether the episode ended (collision or horizon): reset before stepping again
         self.episode_over = True
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """A subclass written Flow's way declares ``observation_space``/``action_space`` as
+        properties: they become every agent's space, readable both as Flow's property and as
+        PettingZoo's ``observation_space(agent)``."""
+        super().__init_subclass__(**kwargs)
+        for name, agent_name, stored in (
+            ("observation_space", "agent_observation_space", "_obs_space"),
+            ("action_space", "agent_action_space", "_act_space"),
+        ):
+            attr = cls.__dict__.get(name)
+            if isinstance(attr, property) and attr.fget is not None:
+                setattr(cls, agent_name, attr)
+                setattr(cls, name, FlowSpace(attr.fget, stored))
 
     # ------------------------------------------------------------------ subclass hooks
     @property
