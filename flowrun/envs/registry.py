@@ -14,6 +14,22 @@ from typing import Any
 
 import gymnasium
 
+from flowrun.envs.base import Env
+from flowrun.envs.bottleneck import (
+    BottleneckAccelEnv,
+    BottleneckDesiredVelocityEnv,
+    BottleneckEnv,
+)
+from flowrun.envs.merge import MergePOEnv
+from flowrun.envs.ring.accel import AccelEnv
+from flowrun.envs.ring.lane_change import LaneChangeAccelEnv, LaneChangeAccelPOEnv
+from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
+from flowrun.envs.test import TestEnv
+from flowrun.envs.traffic_light_grid import (
+    TrafficLightGridBenchmarkEnv,
+    TrafficLightGridEnv,
+    TrafficLightGridPOEnv,
+)
 from flowrun.errors import ConfigError
 from flowrun.import_path import import_near
 from flowrun.suggest import did_you_mean, unknown_name
@@ -31,42 +47,28 @@ MULTIAGENT_ENVS: dict[str, str] = {
 INSTALL_HINT = "pip install 'flowrun[multiagent]'  (or: pip install pettingzoo==1.27.0)"
 
 
-def _builtin() -> dict[str, type]:
-    from flowrun.envs.bottleneck import (
-        BottleneckAccelEnv,
-        BottleneckDesiredVelocityEnv,
-        BottleneckEnv,
-    )
-    from flowrun.envs.merge import MergePOEnv
-    from flowrun.envs.ring.accel import AccelEnv
-    from flowrun.envs.ring.lane_change import LaneChangeAccelEnv, LaneChangeAccelPOEnv
-    from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
-    from flowrun.envs.test import TestEnv
-    from flowrun.envs.traffic_light_grid import (
-        TrafficLightGridBenchmarkEnv,
-        TrafficLightGridEnv,
-        TrafficLightGridPOEnv,
-    )
+#: flowrun's own environment classes, each registered under its class name.
+ENV_CLASSES: tuple[type[Env], ...] = (
+    AccelEnv,
+    WaveAttenuationEnv,
+    WaveAttenuationPOEnv,
+    LaneChangeAccelEnv,
+    LaneChangeAccelPOEnv,
+    MergePOEnv,
+    BottleneckEnv,
+    BottleneckAccelEnv,
+    BottleneckDesiredVelocityEnv,
+    TestEnv,
+    TrafficLightGridEnv,
+    TrafficLightGridPOEnv,
+    TrafficLightGridBenchmarkEnv,
+)
+#: Flow's old names of some of them.
+ALIASES: dict[str, type[Env]] = {"DesiredVelocityEnv": BottleneckDesiredVelocityEnv}
 
-    aliases = {"DesiredVelocityEnv": BottleneckDesiredVelocityEnv}  # Flow's old name
-    return aliases | {
-        c.__name__: c
-        for c in (
-            AccelEnv,
-            WaveAttenuationEnv,
-            WaveAttenuationPOEnv,
-            LaneChangeAccelEnv,
-            LaneChangeAccelPOEnv,
-            MergePOEnv,
-            BottleneckEnv,
-            BottleneckAccelEnv,
-            BottleneckDesiredVelocityEnv,
-            TestEnv,
-            TrafficLightGridEnv,
-            TrafficLightGridPOEnv,
-            TrafficLightGridBenchmarkEnv,
-        )
-    }
+
+def _builtin() -> dict[str, type[Env]]:
+    return {c.__name__: c for c in ENV_CLASSES} | ALIASES
 
 
 def env_names() -> list[str]:
@@ -128,8 +130,6 @@ def resolve_env_class(name: str | None, search_dir: str | Path | None = None) ->
 
 
 def _env_class(module: ModuleType, module_name: str, attr: str, name: str) -> type:
-    from flowrun.envs.base import Env
-
     obj: Any = getattr(module, attr, None)
     if obj is None:
         envs = [  # classes defined here under their own name (no aliases or imports)
