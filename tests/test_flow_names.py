@@ -81,15 +81,12 @@ OUT_OF_SCOPE: dict[tuple[str, str], str] = {
 
 #: Missing today (each a piece of work, not a choice).
 NOT_YET: dict[str, tuple[str, ...]] = {
-    "flow.envs": ("TrafficLightGridTestEnv", "BottleNeckAccelEnv", "PO_TrafficLightGridEnv",
-                  "GreenWaveTestEnv"),
     "flow.envs.multiagent": ("AdversarialAccelEnv", "MultiWaveAttenuationPOEnv",
                              "I210MultiEnv"),
     "flow.networks": ("MultiRingNetwork",),
     "flow.core.rewards": ("veh_energy_consumption", "miles_per_gallon"),
     "flow.core.util": ("makexml", "printxml"),
     "flow.utils.rllib": ("get_rllib_config", "get_rllib_pkl"),
-    "flow.utils.flow_warnings": ("deprecated_attribute", "deprecated"),
     "flow.visualize.time_space_diagram": ("import_data_from_trajectory", "plot_tsd"),
     "flow.visualize.plot_ray_results": ("plot_progress", "create_parser"),
     "flow.visualize.capacity_diagram_generator": ("import_data_from_csv",
@@ -134,3 +131,21 @@ def test_a_name_that_exists_is_the_real_thing_not_a_stub() -> None:
     assert issubclass(I210Router, ContinuousRouter)
     assert issubclass(NonLocalFollowerStopper, FollowerStopper)
     assert MultiAgentAccelPOEnv is Core
+
+
+def test_flows_deprecation_helpers_warn_with_flows_messages() -> None:
+    from flowrun.utils.flow_warnings import deprecated, deprecated_attribute
+
+    class Old:
+        def __init__(self, x: int) -> None:
+            self.x = x
+
+    New = deprecated("flow.envs.old", "flow.envs.new.Old")(Old)
+    with pytest.warns(PendingDeprecationWarning, match="The class flow.envs.old.Old is deprecated"):
+        obj = New(3)
+    assert isinstance(obj, Old) and obj.x == 3
+    twice = deprecated("m", "n.f")(lambda v: v * 2)
+    with pytest.warns(PendingDeprecationWarning, match="The function m.<lambda> is deprecated"):
+        assert twice(4) == 8
+    with pytest.warns(PendingDeprecationWarning, match="attribute scenario in Old is deprecated"):
+        deprecated_attribute(obj, "scenario", "network")

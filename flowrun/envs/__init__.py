@@ -2,6 +2,7 @@
 
 from flowrun.envs.base import Env
 from flowrun.envs.bottleneck import (
+    BottleNeckAccelEnv,
     BottleneckAccelEnv,
     BottleneckDesiredVelocityEnv,
     BottleneckEnv,
@@ -14,27 +15,34 @@ from flowrun.envs.ring.lane_change import LaneChangeAccelEnv, LaneChangeAccelPOE
 from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
 from flowrun.envs.test import TestEnv
 from flowrun.envs.traffic_light_grid import (
+    GreenWaveTestEnv,
+    PO_TrafficLightGridEnv,
     TrafficLightGridBenchmarkEnv,
     TrafficLightGridEnv,
     TrafficLightGridPOEnv,
+    TrafficLightGridTestEnv,
 )
 
 register_envs()
 
 __all__ = [
     "AccelEnv",
+    "BottleNeckAccelEnv",
     "BottleneckAccelEnv",
     "BottleneckDesiredVelocityEnv",
     "BottleneckEnv",
     "DesiredVelocityEnv",
     "Env",
+    "GreenWaveTestEnv",
     "LaneChangeAccelEnv",
     "LaneChangeAccelPOEnv",
     "MergePOEnv",
+    "PO_TrafficLightGridEnv",
     "TestEnv",
     "TrafficLightGridBenchmarkEnv",
     "TrafficLightGridEnv",
     "TrafficLightGridPOEnv",
+    "TrafficLightGridTestEnv",
     "WaveAttenuationEnv",
     "WaveAttenuationPOEnv",
     "env_names",

@@ -37,6 +37,7 @@ __all__ = [
     "ADDITIONAL_RL_ENV_PARAMS",
     "ADDITIONAL_VSL_ENV_PARAMS",
     "MAX_LANES",
+    "BottleNeckAccelEnv",
     "BottleneckAccelEnv",
     "BottleneckDesiredVelocityEnv",
     "BottleneckEnv",
@@ -396,3 +397,5 @@ class BottleneckDesiredVelocityEnv(BottleneckEnv):
 
 #: Flow's deprecated alias of :class:`BottleneckDesiredVelocityEnv`.
 DesiredVelocityEnv = BottleneckDesiredVelocityEnv
+#: Flow's deprecated spelling of :class:`BottleneckAccelEnv` (``flow.envs.bottleneck_env``)
+BottleNeckAccelEnv = BottleneckAccelEnv

@@ -1,8 +1,10 @@
 """Flow compatibility: re-exports. Flow's ``flow.utils.flow_warnings`` path.
 
-``deprecation_warning`` lives in :mod:`flowrun.errors`.
+``deprecated_attribute`` and ``deprecated`` live in :mod:`flowrun.deprecation`,
+``deprecation_warning`` in :mod:`flowrun.errors`.
 """
 
+from flowrun.deprecation import deprecated, deprecated_attribute
 from flowrun.errors import deprecation_warning
 
-__all__ = ["deprecation_warning"]
+__all__ = ["deprecated", "deprecated_attribute", "deprecation_warning"]
