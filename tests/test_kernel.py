@@ -255,27 +255,6 @@ def test_too_many_cars_for_the_ring_is_a_config_error(config: Any) -> None:
 
 
 @pytest.mark.sumo
-def test_render_rgb_array_draws_the_ring_and_cars(config: Any) -> None:
-    env = make_env(config("sugiyama"), render_mode="rgb_array")
-    try:
-        env.reset(seed=0)
-        for _ in range(50):
-            env.step(None)
-        img = env.render()
-    finally:
-        env.close()
-    assert isinstance(img, np.ndarray)
-    assert img.shape == (400, 400, 3)
-    assert img.dtype == np.uint8
-    pixels = img.reshape(-1, 3)
-    background = np.all(pixels == (245, 245, 245), axis=1)
-    road = np.all(pixels == (90, 90, 90), axis=1)
-    assert road.sum() > 1000
-    cars = ~background & ~road & (pixels[:, 0] > 150)  # red-to-green speed colours
-    assert cars.sum() > 22 * 10
-
-
-@pytest.mark.sumo
 def test_frames_completed_in_batches_equal_frames_read_step_by_step(
     config: Any, tmp_path: Path
 ) -> None:
