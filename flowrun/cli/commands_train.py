@@ -5,7 +5,6 @@ from __future__ import annotations
 import sys
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -26,7 +25,7 @@ from flowrun.cli.commands_run import (
     console,
     overrides_with_seed,
 )
-from flowrun.cli.common import DEFAULT_OUT, guarded, load_located, on_stop_signals, out_option
+from flowrun.cli.common import DEFAULT_OUT, guarded, on_stop_signals, out_option
 from flowrun.cli.feedback import Feedback, duration
 from flowrun.cli.tables import compare_table
 from flowrun.errors import FlowrunError
@@ -44,28 +43,6 @@ EvalOutOpt = Annotated[
     Path | None,
     out_option("the evaluation folders, OUT/<timestamp>-<seed>/ (default OUT: RUN_DIR/eval)"),
 ]
-
-
-def not_a_training_run(run_dir: Path) -> FlowrunError:
-    """The error for a run folder whose config has no ``train:`` section (a baseline run)."""
-    return FlowrunError(
-        f"{run_dir} is not a training run: its config.yaml has no train: section (a "
-        "baseline run folder?); pass a folder made by flowrun train"
-    )
-
-
-def _check_steps_left(run_dir: Path, total: int) -> None:
-    """Refuse to resume a complete run that has already trained ``total`` steps (it would
-    train nothing and replace its final model and evaluation)."""
-    from flowrun.rundir.train_state import read_metrics, run_state
-
-    done = (read_metrics(run_dir) or {}).get("timesteps")
-    if run_state(run_dir) == "complete" and isinstance(done, int) and done >= total:
-        raise FlowrunError(
-            f"{run_dir} already trained {done} of train.total_timesteps={total} steps; to "
-            f"continue, raise it (--set train.total_timesteps={2 * done}), or evaluate it "
-            f"with flowrun eval {run_dir}"
-        )
 
 
 @contextmanager
@@ -117,72 +94,19 @@ def train(
     continues from its last checkpoint, keeping the earlier monitor files, evaluations and
     best model. Ctrl-C or SIGTERM saves a checkpoint and exits with 130 / 143.
     """
-    from flowrun.config.flow_module import is_flow_module
-    from flowrun.config.loader import load_config
-    from flowrun.config.model import TrainConfig
-    from flowrun.config.preflight import preflight
-    from flowrun.training.deps import require
-    from flowrun.training.trainer import resume_config
+    from flowrun.training.prepare import prepare_training
 
     overrides = overrides_with_seed(set_, seed)
     if seed is not None:
         overrides.append(f"train.seed={seed}")
-    if resume is not None and out != DEFAULT_OUT:
-        raise FlowrunError(
-            f"--out has no effect with --resume: training continues in {resume}; drop --out"
-        )
-    if resume is not None:
-        saved = resume / "config.yaml"
-        if saved.is_file() and load_config(saved).train is None:
-            raise not_a_training_run(resume)
-        cfg = resume_config(resume, overrides)
-        _check_steps_left(resume, cfg.train.total_timesteps if cfg.train else 0)
-        console.print(f"resuming {resume} with its config.yaml (CONFIG is not re-read)")
-    else:
-        cfg, where = load_located(config, overrides)
-        if cfg.train is None and is_flow_module(config):
-            cfg = replace(cfg, train=TrainConfig())
-            console.print(
-                "a Flow config has no train: section: training PPO with flowrun's defaults "
-                "(change them with --set train.total_timesteps=... etc.)"
-            )
-        preflight(cfg, where)  # env class, its params, hyper-parameter names: at file:line
-    rllib = cfg.train is not None and cfg.train.backend == "rllib"
-    if rllib:
-        from flowrun.training.rllib import require_ray
-
-        require_ray()
-    else:
-        require("stable_baselines3")
-        if ray_address is not None:
-            raise FlowrunError(
-                "--ray-address is for train.backend: rllib; this config trains with "
-                "stable-baselines3 (set train.backend: rllib, or drop --ray-address)"
-            )
+    plan = prepare_training(config, overrides, resume, out != DEFAULT_OUT, ray_address)
     feedback = Feedback(console)
-    train_cfg = cfg.train or TrainConfig()
-    if rllib:
-        feedback.phase("starting Ray and its environment runners (RLlib)")
-    elif cfg.sim.backend == "numpy":
-        feedback.phase(f"starting {train_cfg.n_envs} numpy rings and the {train_cfg.algorithm} "
-                       "model")
-    else:
-        feedback.phase(
-            f"starting {train_cfg.n_envs} environment process(es) and the "
-            f"{train_cfg.algorithm} model"
-        )
+    for note in plan.notes:
+        feedback.phase(note)
+    feedback.phase(_start_phase(plan.cfg, plan.rllib))
+    cfg, rllib, train_cfg = plan.cfg, plan.rllib, plan.train
     result = _train_with_progress(feedback, cfg, out, resume, rllib, ray_address, config)
-    resumed = f" (resumed at {result.resumed_from})" if result.resumed_from else ""
-    timing = result.timing
-    share = (
-        f", evaluation {timing.evaluation_share:.0%} of it"
-        if timing is not None and timing.evaluation_share > 0
-        else ""
-    )
-    feedback.phase(
-        f"training finished: {result.timesteps} steps{resumed} in {duration(result.wall_clock)}"
-        f" ({result.steps_per_second:.0f} steps/s{share})"
-    )
+    feedback.phase(_finished_phase(result))
     episodes = train_cfg.eval_episodes
     feedback.phase(
         f"final evaluation: the trained model (best, else final) and the all-human baseline, "
@@ -190,6 +114,33 @@ def train(
     )
     shown = _evaluate_and_show(result.run_dir, episodes, True, [], None, "best", None, feedback)
     feedback.close(f"run folder: {result.run_dir}; evaluation folder: {shown}")
+
+
+def _finished_phase(result: TrainResult) -> str:
+    """What training did: steps, time, speed and the evaluations' share."""
+    resumed = f" (resumed at {result.resumed_from})" if result.resumed_from else ""
+    timing = result.timing
+    share = (
+        f", evaluation {timing.evaluation_share:.0%} of it"
+        if timing is not None and timing.evaluation_share > 0
+        else ""
+    )
+    return (
+        f"training finished: {result.timesteps} steps{resumed} in {duration(result.wall_clock)}"
+        f" ({result.steps_per_second:.0f} steps/s{share})"
+    )
+
+
+def _start_phase(cfg: ExperimentConfig, rllib: bool) -> str:
+    """The line said while the environments and the model start (a silent minute else)."""
+    from flowrun.config.model import TrainConfig
+
+    train = cfg.train or TrainConfig()
+    if rllib:
+        return "starting Ray and its environment runners (RLlib)"
+    if cfg.sim.backend == "numpy":
+        return f"starting {train.n_envs} numpy rings and the {train.algorithm} model"
+    return f"starting {train.n_envs} environment process(es) and the {train.algorithm} model"
 
 
 def _train_with_progress(
@@ -303,6 +254,7 @@ def _evaluate_and_show(
     folder."""
     from flowrun.rundir.train_state import run_state
     from flowrun.training.evaluate import eval_config, evaluate, model_path
+    from flowrun.training.prepare import not_a_training_run
     from flowrun.training.rllib import evaluate_rllib, is_rllib_run
 
     evaluate_run = evaluate_rllib if is_rllib_run(run_dir) else evaluate
