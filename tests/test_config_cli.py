@@ -66,6 +66,14 @@ def test_list_names(app: typer.Typer, what: str, expected: str) -> None:
     assert expected in result.stdout.split()
 
 
+def test_list_controllers_shows_each_parameter_with_default_unit_and_bounds(
+    app: typer.Typer,
+) -> None:
+    lines = CliRunner().invoke(app, ["list", "controllers"]).stdout.splitlines()
+    idm = lines.index("IDM  (IDMController, acceleration)")
+    assert lines[idm + 1].strip() == "v0 = 30 m/s, > 0: desired speed"
+
+
 def test_list_unknown_what_suggests(app: typer.Typer) -> None:
     result = CliRunner().invoke(app, ["list", "netwroks"])
     assert result.exit_code == 1

@@ -16,7 +16,7 @@ from flowrun.suggest import unknown_name
 LISTS: dict[str, tuple[str, str]] = {
     "envs": ("flowrun.envs.registry", "env_names"),
     "networks": ("flowrun.networks.registry", "network_lines"),  # with their parameters
-    "controllers": ("flowrun.controllers.registry", "controller_names"),
+    "controllers": ("flowrun.controllers.registry", "controller_lines"),  # with parameters
 }
 
 
