@@ -83,7 +83,6 @@ OUT_OF_SCOPE: dict[tuple[str, str], str] = {
 NOT_YET: dict[str, tuple[str, ...]] = {
     "flow.envs.multiagent": ("AdversarialAccelEnv", "MultiWaveAttenuationPOEnv",
                              "I210MultiEnv"),
-    "flow.networks": ("MultiRingNetwork",),
     "flow.core.rewards": ("veh_energy_consumption", "miles_per_gallon"),
     "flow.core.util": ("makexml", "printxml"),
     "flow.utils.rllib": ("get_rllib_config", "get_rllib_pkl"),

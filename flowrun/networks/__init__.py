@@ -8,6 +8,7 @@ from flowrun.networks.highway_ramps import HighwayRampsNetwork
 from flowrun.networks.i210_subnetwork import I210SubNetwork
 from flowrun.networks.merge import MergeNetwork
 from flowrun.networks.minicity import MiniCityNetwork
+from flowrun.networks.multi_ring import MultiRingNetwork
 from flowrun.networks.ring import ADDITIONAL_NET_PARAMS, RingNetwork
 from flowrun.networks.template import TemplateNetwork
 from flowrun.networks.traffic_light_grid import TrafficLightGridNetwork
@@ -21,6 +22,7 @@ __all__ = [
     "I210SubNetwork",
     "MergeNetwork",
     "MiniCityNetwork",
+    "MultiRingNetwork",
     "Network",
     "NetworkSpec",
     "RingNetwork",

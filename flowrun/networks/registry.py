@@ -16,6 +16,7 @@ from flowrun.networks.highway_ramps import HighwayRampsNetwork
 from flowrun.networks.i210_subnetwork import I210SubNetwork
 from flowrun.networks.merge import MergeNetwork
 from flowrun.networks.minicity import MiniCityNetwork
+from flowrun.networks.multi_ring import MultiRingNetwork
 from flowrun.networks.ring import RingNetwork, check_ring_fits
 from flowrun.networks.template import TemplateNetwork
 from flowrun.networks.traffic_light_grid import TrafficLightGridNetwork
@@ -32,6 +33,7 @@ NETWORKS: dict[str, type[Network]] = {
     "highway_ramps": HighwayRampsNetwork,
     "i210_subnetwork": I210SubNetwork,
     "minicity": MiniCityNetwork,
+    "multi_ring": MultiRingNetwork,
 }
 _ALIASES = {
     "loop": "ring",
@@ -58,6 +60,9 @@ _ALIASES = {
     "I210SubNetwork": "i210_subnetwork",
     "MiniCityNetwork": "minicity",
     "MiniCityScenario": "minicity",
+    "MultiRingNetwork": "multi_ring",
+    "MultiRingScenario": "multi_ring",
+    "MultiLoopScenario": "multi_ring",
 }
 
 
