@@ -136,11 +136,15 @@ def test_baseline_has_no_av_and_evaluates(name: str) -> None:
     if bench.family == "figureeight":
         assert cars(cfg, rl=False) == 14
         group = cfg.vehicles.groups[0]
-        assert group.acceleration_controller.params["noise"] == 0.2
-        assert group.car_following_params.speed_mode == 1
-        # Flow's SumoCarFollowingParams(speed_mode="obey_safe_speed"): its default vType
-        assert group.car_following_params.decel == 4.5
-        assert group.car_following_params.speed_dev == 0.1
+        # the paper's N(0, 0.2) per 0.1 s step, in flowrun's sqrt(dt)-scaled units
+        assert group.acceleration_controller.params["noise"] == pytest.approx(0.2 / 0.1**0.5,
+                                                                              abs=1e-3)
+        cf = group.car_following_params
+        assert cf.speed_mode == 1
+        # Flow's 2018 SumoCarFollowingParams() (the paper's commit), minGap 0 under IDM
+        assert (cf.accel, cf.decel, cf.min_gap, cf.speed_dev) == (1.0, 1.5, 0.0, 0.1)
+        # the same humans as the benchmark configs' own
+        assert cf == config("figureeight0").vehicles.groups[0].car_following_params
 
 
 def test_select_takes_all_families_and_names_in_flows_order() -> None:

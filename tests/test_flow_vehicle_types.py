@@ -35,9 +35,14 @@ def flow_vtype(speed_mode: int, lc_mode: int = 512, **changes: float) -> dict[st
 
 # merge0/1/2.py: SumoCarFollowingParams(speed_mode=9) for humans and AVs
 MERGE = {"human": flow_vtype(9), "rl": flow_vtype(9)}
-# figureeight0/1/2.py: humans (speed_mode="obey_safe_speed", decel=1.5), AVs
-# (speed_mode="obey_safe_speed")
+# figureeight0/1/2.py of Flow's last version: humans (speed_mode="obey_safe_speed",
+# decel=1.5), AVs (speed_mode="obey_safe_speed")
 FIGURE_EIGHT = {"human": flow_vtype(1, decel=1.5), "rl": flow_vtype(1)}
+#: Flow's SumoCarFollowingParams() at the paper's commit (bc44b21, 2018), which the figure-eight
+#: benchmarks keep (speed mode 1, "no_collide" then); an IDM-driven car's minGap was 0
+FLOW_2018 = {"accel": 1.0, "decel": 1.5}
+PAPER_FIGURE_EIGHT = {"human": flow_vtype(1, **FLOW_2018, minGap=0.0),
+                      "rl": flow_vtype(1, **FLOW_2018)}  # fmt: skip
 # grid0/1.py, multiagent_traffic_light_grid.py: (min_gap=2.5, max_speed=30, decel=7.5,
 # speed_mode="right_of_way")
 GRID = {"human": flow_vtype(25, decel=7.5)}
@@ -48,9 +53,9 @@ EXPECTED: dict[str, dict[str, dict[str, Any]]] = {
     "benchmarks/merge1": MERGE,
     "benchmarks/merge2": MERGE,
     "figure_eight_rl": FIGURE_EIGHT,
-    "benchmarks/figureeight0": FIGURE_EIGHT,
-    "benchmarks/figureeight1": FIGURE_EIGHT,
-    "benchmarks/figureeight2": {"rl": FIGURE_EIGHT["rl"]},
+    "benchmarks/figureeight0": PAPER_FIGURE_EIGHT,
+    "benchmarks/figureeight1": PAPER_FIGURE_EIGHT,
+    "benchmarks/figureeight2": {"rl": PAPER_FIGURE_EIGHT["rl"]},
     # non_rl/figure_eight.py: (speed_mode="obey_safe_speed", decel=1.5)
     "figure_eight": {"idm": flow_vtype(1, decel=1.5)},
     "grid0": GRID,

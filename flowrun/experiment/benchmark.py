@@ -5,9 +5,9 @@ step, demand, penetration rate and env class; ``flowrun train`` trains it) and a
 baseline derived from it by ``--set`` overrides, as Flow's ``flow/benchmarks/baselines/``
 scripts define it:
 
-* figure eight (``baselines/figureeight012.py``): 14 noisy IDM drivers (noise 0.2, speed mode
-  1, Flow's default vehicle type: decel 4.5, speedDev 0.1) and no AV, the same for
-  figureeight0/1/2;
+* figure eight (``baselines/figureeight012.py``): 14 noisy IDM drivers and no AV, the same for
+  figureeight0/1/2, with the humans of the configs (the paper's: noise 0.2 per 0.1 s step,
+  speed mode 1, Flow's 2018 vehicle type: accel 1.0, decel 1.5, minGap 0, speedDev 0.1);
 * merge (``baselines/merge012.py``): no AVs, all 2,000 veh/h of the highway human (the ramp's
   100 veh/h as before);
 * grid (``baselines/grid0.py``, ``grid1.py``): the same cars, SUMO's actuated lights;
@@ -39,9 +39,9 @@ from flowrun.suggest import unknown_name
 FAMILIES = ("figureeight", "merge", "grid", "bottleneck")
 
 _FIG8_HUMANS = (
-    "vehicles=[{id: human, count: 14, acceleration_controller: {type: IDM, noise: 0.2}, "
+    "vehicles=[{id: human, count: 14, acceleration_controller: {type: IDM, noise: 0.632}, "
     "routing_controller: {type: ContinuousRouter}, car_following: {speed_mode: obey_safe_speed, "
-    "decel: 4.5, speed_dev: 0.1}}]"
+    "accel: 1.0, decel: 1.5, min_gap: 0, speed_dev: 0.1}}]"
 )
 _MERGE_HUMANS = (
     "network.inflows=[{edge: inflow_highway, veh_type: human, vehs_per_hour: 2000, "
