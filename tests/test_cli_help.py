@@ -56,3 +56,16 @@ def test_benchmark_without_names_is_a_quick_look_and_all_is_full_length(tmp_path
     assert full.benchmarks == quick.benchmarks and full.sets == ()
     longer = make_plan([], 1, None, False, None, False, None, ["env.horizon=80"], tmp_path)
     assert longer.sets[-1] == "env.horizon=80"  # the user's --set comes last and wins
+
+
+def test_sweep_plan_is_checked_without_typer(tmp_path: Path) -> None:
+    from flowrun.cli.commands_sweep import SweepRequest, prepare_sweep
+    from flowrun.errors import ConfigError
+
+    config = Path(__file__).resolve().parent.parent / "configs" / "sugiyama.yaml"
+    request = SweepRequest(config, ["network.length=220,240"], seeds=2, steps=10, out=tmp_path)
+    plan, backend, run_args = prepare_sweep(request)
+    assert backend == "local" and run_args == ["--steps", "10", "--runs", "1"]
+    assert len(plan.points) == 4  # 2 lengths x 2 seeds
+    with pytest.raises(ConfigError, match="--runs must be >= 1"):
+        prepare_sweep(SweepRequest(config, ["network.length=220"], runs=0, out=tmp_path))

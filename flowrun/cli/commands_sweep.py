@@ -17,6 +17,7 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from contextlib import AbstractContextManager, contextmanager, nullcontext
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -180,8 +181,9 @@ def sweep(
             help="key.path=v1,v2,... : the values to sweep (YAML scalars). Several multiply.",
         ),
     ],
-    seeds: Annotated[int, typer.Option("--seeds", metavar="N",
-    help="Seeds per grid point.")] = 1,
+    seeds: Annotated[
+        int, typer.Option("--seeds", metavar="N", help="Seeds per grid point.")
+    ] = 1,
     jobs: Annotated[
         int | None,
         typer.Option(
@@ -202,8 +204,7 @@ def sweep(
             metavar="N",
             help="Steps per run (default: env.horizon).")
     ] = None,
-    runs: Annotated[int, typer.Option("--runs", metavar="N",
-    help="Runs per point.")] = 1,
+    runs: Annotated[int, typer.Option("--runs", metavar="N", help="Runs per point.")] = 1,
     no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
     backend: Annotated[
         str | None,
@@ -238,24 +239,12 @@ def sweep(
     With --backend ray (or --ray-address) each point is a Ray task (one CPU, its own SUMO
     process); on several machines the config and --out must be on a shared file system.
     """
-    from flowrun.config.flow_module import load_any_config
     from flowrun.experiment import sweep as sw
-    from flowrun.rundir.folders import check_out_dir
 
-    axes = sw.parse_grid(grid)
-    sw.check_metric(metric, has_signals=True)
-    if jobs is not None and jobs < 1:
-        raise ConfigError(f"--jobs must be >= 1, got {jobs}")
-    if runs < 1:
-        raise ConfigError(f"--runs must be >= 1, got {runs}")
-    chosen = _backend(backend, ray_address)
     sets = list(set_ or [])
-    cfg = load_any_config(config, overrides_with_seed(sets, seed))
-    run_args = [*(["--steps", str(steps)] if steps is not None else []), "--runs", str(runs)]
-    run_args += ["--no-record"] if no_record else []
-    plan = sw.plan_sweep(cfg, axes, seeds, out, run_args)
-    _check_points(config, sets, plan, steps)
-    check_out_dir(out)
+    request = SweepRequest(config, grid, seeds, jobs, metric, steps, runs, no_record, backend,
+                           ray_address, seed, sets, out)  # fmt: skip
+    plan, chosen, run_args = prepare_sweep(request)
     try:
         with _cluster(chosen, ray_address) as cpus, sw.locked(plan):
             sw.write_plan(plan, sys.argv)
@@ -263,6 +252,55 @@ def sweep(
             _run_sweep(config, sets, plan, out, run_args, jobs or cpus, metric, runner)
     except OSError as err:
         raise FlowrunError(f"cannot write sweep folder {plan.folder}: {err.strerror}") from None
+
+
+@dataclass(frozen=True)
+class SweepRequest:
+    """``flowrun sweep``'s arguments (see its help)."""
+
+    config: Path
+    grid: list[str]
+    seeds: int = 1
+    jobs: int | None = None
+    metric: str = "mean_speed"
+    steps: int | None = None
+    runs: int = 1
+    no_record: bool = False
+    backend: str | None = None
+    ray_address: str | None = None
+    seed: int | None = None
+    sets: list[str] = field(default_factory=list)
+    out: Path = DEFAULT_OUT
+
+
+def prepare_sweep(request: SweepRequest) -> tuple[SweepPlan, str, list[str]]:
+    """Every check a sweep makes before it starts, and its plan: the points, the backend
+    (``local`` or ``ray``) and the arguments each point's ``flowrun baseline`` gets.
+
+    Raises:
+        ConfigError: a bad --grid, metric, number or config, or a point whose config does
+            not load (with its values).
+        FlowrunError: an unusable --out, a backend that cannot run.
+    """
+    from flowrun.config.flow_module import load_any_config
+    from flowrun.experiment import sweep as sw
+    from flowrun.rundir.folders import check_out_dir
+
+    r = request
+    axes = sw.parse_grid(r.grid)
+    sw.check_metric(r.metric, has_signals=True)
+    if r.jobs is not None and r.jobs < 1:
+        raise ConfigError(f"--jobs must be >= 1, got {r.jobs}")
+    if r.runs < 1:
+        raise ConfigError(f"--runs must be >= 1, got {r.runs}")
+    chosen = _backend(r.backend, r.ray_address)
+    cfg = load_any_config(r.config, overrides_with_seed(r.sets, r.seed))
+    run_args = [*(["--steps", str(r.steps)] if r.steps is not None else []), "--runs", str(r.runs)]
+    run_args += ["--no-record"] if r.no_record else []
+    plan = sw.plan_sweep(cfg, axes, r.seeds, r.out, run_args)
+    _check_points(r.config, r.sets, plan, r.steps)
+    check_out_dir(r.out)
+    return plan, chosen, run_args
 
 
 def _run_sweep(
