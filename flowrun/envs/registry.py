@@ -37,6 +37,7 @@ from flowrun.suggest import did_you_mean, unknown_name
 #: ``env.class`` name -> ``module:Class`` of each multi-agent environment.
 MULTIAGENT_ENVS: dict[str, str] = {
     "MultiAgentWaveAttenuationPOEnv": "flowrun.multiagent.ring:MultiAgentWaveAttenuationPOEnv",
+    "MultiWaveAttenuationPOEnv": "flowrun.multiagent.rings:MultiWaveAttenuationPOEnv",
     "MultiAgentAccelPOEnv": "flowrun.multiagent.ring:MultiAgentAccelPOEnv",
     "MultiAgentMergePOEnv": "flowrun.multiagent.merge:MultiAgentMergePOEnv",
     "MultiAgentHighwayPOEnv": "flowrun.multiagent.highway:MultiAgentHighwayPOEnv",

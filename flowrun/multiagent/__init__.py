@@ -22,6 +22,7 @@ __all__ = [
     "MultiAgentWaveAttenuationPOEnv",
     "MultiEnv",
     "MultiTrafficLightGridPOEnv",
+    "MultiWaveAttenuationPOEnv",
 ]
 
 _LAZY = {name: path for name, path in MULTIAGENT_ENVS.items()} | {

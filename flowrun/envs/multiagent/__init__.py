@@ -19,6 +19,7 @@ __all__ = [
     "MultiAgentWaveAttenuationPOEnv",
     "MultiEnv",
     "MultiTrafficLightGridPOEnv",
+    "MultiWaveAttenuationPOEnv",
 ]
 
 

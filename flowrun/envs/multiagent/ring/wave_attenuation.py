@@ -5,5 +5,6 @@ Flow's ``flow.envs.multiagent.ring.wave_attenuation`` import path
 """
 
 from flowrun.multiagent.ring import MultiAgentWaveAttenuationPOEnv
+from flowrun.multiagent.rings import MultiWaveAttenuationPOEnv
 
-__all__ = ["MultiAgentWaveAttenuationPOEnv"]
+__all__ = ["MultiAgentWaveAttenuationPOEnv", "MultiWaveAttenuationPOEnv"]
