@@ -32,7 +32,7 @@ from flowrun.suggest import did_you_mean
 
 Check = Callable[[Any], str | None]
 
-ALGORITHMS = ("PPO", "A2C", "SAC", "TD3", "DDPG", "TRPO")
+ALGORITHMS = ("PPO", "A2C", "SAC", "TD3", "DDPG", "TRPO", "ARS")
 SPACINGS = ("uniform", "random", "custom")
 SIM_BACKENDS = ("sumo", "numpy")
 TRAIN_BACKENDS = ("sb3", "rllib")

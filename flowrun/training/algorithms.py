@@ -30,6 +30,8 @@ ALGORITHMS: dict[str, tuple[str, str]] = {
     "TD3": ("stable_baselines3", "TD3"),
     "DDPG": ("stable_baselines3", "DDPG"),
     "TRPO": ("sb3_contrib", "TRPO"),
+    # sb3-contrib's ARS, stopping between updates when asked (flowrun.training.ars)
+    "ARS": ("flowrun.training.ars", "ARS"),
 }
 OFF_POLICY = ("SAC", "TD3", "DDPG")
 
@@ -154,6 +156,10 @@ _RULES: dict[str, tuple[str, float | None, float | None, bool]] = {
     "line_search_max_iter": ("int", 1, None, False),
     "n_critic_updates": ("int", 1, None, False),
     "sub_sampling_factor": ("int", 1, None, False),
+    "n_delta": ("int", 1, None, False),
+    "n_top": ("int", 1, None, False),
+    "n_eval_episodes": ("int", 1, None, False),
+    "delta_std": ("float", 0, None, True),
     "gamma": ("float", 0, 1, False),
     "gae_lambda": ("float", 0, 1, False),
     "tau": ("float", 0, 1, False),
@@ -171,7 +177,7 @@ _RULES: dict[str, tuple[str, float | None, float | None, bool]] = {
     "ent_coef": ("float", 0, None, False),
 }
 _BOOLS = ("normalize_advantage", "use_sde", "use_rms_prop", "sde_support",
-          "optimize_memory_usage", "share_features_extractor")  # fmt: skip
+          "optimize_memory_usage", "share_features_extractor", "zero_policy")  # fmt: skip
 # SAC's ``ent_coef: auto`` / ``auto_0.1`` and ``target_entropy: auto`` are strings.
 _AUTO = ("ent_coef", "target_entropy")
 
@@ -212,11 +218,25 @@ def check_hyperparam_values(
                 "advantage estimate needs more than one step per update",
                 "train.hyperparams.n_steps",
             )
+    _check_ars(algorithm, hyperparams)
     batch = hyperparams.get("batch_size")
     if algorithm == "PPO" and isinstance(batch, int) and batch == 1:
         raise ConfigError(
             "PPO needs batch_size > 1 (a mini-batch of one cannot normalise advantages)",
             "train.hyperparams.batch_size",
+        )
+
+
+def _check_ars(algorithm: str, hyperparams: Mapping[str, Any]) -> None:
+    """ARS keeps the ``n_top`` best of its ``n_delta`` directions: ``n_top <= n_delta``."""
+    if algorithm != "ARS":
+        return
+    n_delta, n_top = hyperparams.get("n_delta", 8), hyperparams.get("n_top")
+    if isinstance(n_top, int) and isinstance(n_delta, int) and n_top > n_delta:
+        raise ConfigError(
+            f"ARS keeps the n_top best of its n_delta directions: n_top ({n_top}) must be "
+            f"<= n_delta ({n_delta})",
+            "train.hyperparams.n_top",
         )
 
 

@@ -19,7 +19,7 @@ from flowrun.errors import ConfigError
 from flowrun.suggest import did_you_mean
 
 # Hyper-parameters SB3 accepts as a schedule (a float or a function of progress_remaining).
-SCHEDULE_PARAMS = ("learning_rate", "clip_range", "clip_range_vf")
+SCHEDULE_PARAMS = ("learning_rate", "clip_range", "clip_range_vf", "delta_std")
 KINDS = ("linear", "constant")
 
 

@@ -177,7 +177,8 @@ def train(
             callbacks.append(make_periodic_eval_callback(
                 runner, run_dir, tc.eval_freq, BEST_MODEL, BEST_VECNORMALIZE, timing,
             ))
-        status = _learn(model, tc, callbacks, state, stop)
+        extra = _learn_kwargs(model, cfg, tc, seed, run_dir, stop)
+        status = _learn(model, tc, callbacks, state, stop, extra)
         done = int(model.num_timesteps)
         finish = time.perf_counter()
         _save_end(model, run_dir, tc, status)
@@ -228,14 +229,37 @@ def _learn(
     callbacks: list[Any],
     state: dict[str, Any] | None,
     stop: StopRequested,
+    extra: dict[str, Any],
 ) -> str:
     """Learn up to ``total_timesteps``; ``complete``, or ``interrupted`` when stopped."""
     remaining = tc.total_timesteps - int(model.num_timesteps)
     if remaining > 0 and not stop():
         model.learn(
-            remaining, callback=callbacks, tb_log_name="run", reset_num_timesteps=state is None
+            remaining, callback=callbacks, tb_log_name="run", reset_num_timesteps=state is None,
+            **extra,
         )
+    elif "async_eval" in extra:
+        extra["async_eval"].close()
     return "interrupted" if stop() and model.num_timesteps < tc.total_timesteps else "complete"
+
+
+def _learn_kwargs(
+    model: BaseAlgorithm,
+    cfg: ExperimentConfig,
+    tc: TrainConfig,
+    seed: int,
+    run_dir: Path,
+    stop: StopRequested,
+) -> dict[str, Any]:
+    """ARS evaluates its candidates in ``n_envs`` worker processes of its own
+    (:mod:`flowrun.training.ars`); the other algorithms need nothing more."""
+    if tc.algorithm != "ARS":
+        return {}
+    ars = require("flowrun.training.ars")
+    kwargs: dict[str, Any] = ars.learn_kwargs(
+        model, cfg, tc.n_envs, seed, tc.normalize, run_dir / "monitor", stop
+    )
+    return kwargs
 
 
 def _save_end(model: BaseAlgorithm, run_dir: Path, tc: TrainConfig, status: str) -> None:
@@ -287,14 +311,17 @@ def _training_env(
     monitor_dir.mkdir(exist_ok=True)
     # Resumed runs reseed differently so they do not replay the first episodes.
     env_seed = seed if state is None else seed + int(state["timesteps"])
-    venv = make_vec_env(cfg, tc.n_envs, env_seed, monitor_dir=monitor_dir, subprocess=True,
-                        worker_rollouts=True)
+    ars = tc.algorithm == "ARS"  # its workers step their own envs; this one gives the spaces
+    venv = make_vec_env(
+        cfg, 1 if ars else tc.n_envs, env_seed, monitor_dir=None if ars else monitor_dir,
+        subprocess=True, worker_rollouts=not ars,
+    )
     venv = timed_vec_env(venv, timing)
     if tc.normalize:
         stats = None
         if state is not None and state.get("vecnormalize"):
             stats = run_dir / "checkpoints" / state["vecnormalize"]
-        venv = wrap_normalize(venv, stats, training=True, gamma=_gamma(tc))
+        venv = wrap_normalize(venv, stats, training=True, gamma=_gamma(tc), rewards=not ars)
     return venv
 
 

@@ -133,10 +133,13 @@ def _numpy_vec_env(
     return venv
 
 
-def wrap_normalize(venv: VecEnv, stats: Path | None, training: bool, gamma: float = 0.99) -> VecEnv:
+def wrap_normalize(
+    venv: VecEnv, stats: Path | None, training: bool, gamma: float = 0.99, rewards: bool = True
+) -> VecEnv:
     """Wrap in ``VecNormalize``: fresh, or with the statistics saved at ``stats``.
 
-    Observations are normalised; rewards too while training (discounted with ``gamma``).
+    Observations are normalised; rewards too while training (discounted with ``gamma``)
+    unless ``rewards`` is false (ARS ranks candidates by their raw returns).
     """
     vec = require("stable_baselines3.common.vec_env")
     if stats is not None:
@@ -145,4 +148,6 @@ def wrap_normalize(venv: VecEnv, stats: Path | None, training: bool, gamma: floa
         if not training:
             normalized.norm_reward = False  # type: ignore[attr-defined]
         return normalized
-    return vec.VecNormalize(venv, training=training, norm_reward=training, gamma=gamma)
+    return vec.VecNormalize(
+        venv, training=training, norm_reward=training and rewards, gamma=gamma
+    )
