@@ -38,6 +38,7 @@ from flowrun.suggest import did_you_mean, unknown_name
 MULTIAGENT_ENVS: dict[str, str] = {
     "MultiAgentWaveAttenuationPOEnv": "flowrun.multiagent.ring:MultiAgentWaveAttenuationPOEnv",
     "MultiWaveAttenuationPOEnv": "flowrun.multiagent.rings:MultiWaveAttenuationPOEnv",
+    "AdversarialAccelEnv": "flowrun.multiagent.adversarial:AdversarialAccelEnv",
     "MultiAgentAccelPOEnv": "flowrun.multiagent.ring:MultiAgentAccelPOEnv",
     "MultiAgentMergePOEnv": "flowrun.multiagent.merge:MultiAgentMergePOEnv",
     "MultiAgentHighwayPOEnv": "flowrun.multiagent.highway:MultiAgentHighwayPOEnv",

@@ -15,6 +15,7 @@ from flowrun.envs.registry import INSTALL_HINT, MULTIAGENT_ENVS
 __all__ = [
     "INSTALL_HINT",
     "MULTIAGENT_ENVS",
+    "AdversarialAccelEnv",
     "MultiAgentAccelPOEnv",
     "MultiAgentEnv",
     "MultiAgentHighwayPOEnv",

@@ -11,7 +11,6 @@ import logging
 from abc import abstractmethod
 from typing import Any
 
-import gymnasium
 import numpy as np
 import numpy.typing as npt
 from gymnasium.spaces import Box
@@ -138,13 +137,11 @@ class MultiAgentEnv(Env, ParallelEnv[str, Obs, Action]):
             vk.apply_acceleration(ids, np.array([float(rl_actions[a][0]) for a in ids]))
 
     # ------------------------------------------------------------------ PettingZoo API
-    def observation_space(self, agent: str) -> gymnasium.Space[Any]:  # type: ignore[override]
-        """The observation space of ``agent`` (the same object every call)."""
-        return self.observation_spaces[agent]
-
-    def action_space(self, agent: str) -> gymnasium.Space[Any]:  # type: ignore[override]
-        """The action space of ``agent`` (the same object every call)."""
-        return self.action_spaces[agent]
+    #: every agent's observation space: read as Flow's property (``env.observation_space``)
+    #: or called as PettingZoo's method (``env.observation_space(agent)``), the same object
+    observation_space = FlowSpace(lambda env: env.agent_observation_space, "_obs_space")
+    #: every agent's action space, as :attr:`observation_space`
+    action_space = FlowSpace(lambda env: env.agent_action_space, "_act_space")
 
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None

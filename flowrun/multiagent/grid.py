@@ -53,7 +53,7 @@ def neighbour_index(light: int, rows: int, cols: int, side: str) -> int:
     raise ValueError(f"unknown side {side!r}")
 
 
-class MultiTrafficLightGridPOEnv(MultiAgentEnv, TrafficLightGridPOEnv):  # type: ignore[misc]
+class MultiTrafficLightGridPOEnv(MultiAgentEnv, TrafficLightGridPOEnv):
     """One agent per traffic light of the grid (Flow's ``MultiTrafficLightGridPOEnv``).
 
     Agents: the lights ``center{i}`` (``possible_agents`` = ``agents`` for the whole episode).

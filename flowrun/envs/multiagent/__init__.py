@@ -13,6 +13,7 @@ from typing import Any
 import flowrun.multiagent as _multiagent
 
 __all__ = [
+    "AdversarialAccelEnv",
     "MultiAgentAccelPOEnv",
     "MultiAgentHighwayPOEnv",
     "MultiAgentMergePOEnv",
