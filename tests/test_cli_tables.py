@@ -4,12 +4,17 @@ network's headline metric; the plain-text progress for output that is not a term
 from __future__ import annotations
 
 import io
+import json
 import math
+from pathlib import Path
 from types import SimpleNamespace
 
+import pytest
 from rich.console import Console
+from typer.testing import CliRunner
 
 from flowrun.cli import feedback as fb
+from flowrun.cli.main import app
 from flowrun.cli.tables import compare_table, metrics_table, signals_table
 
 
@@ -95,3 +100,19 @@ def test_durations_read_naturally() -> None:
     assert fb.duration(12.34) == "12.3 s"
     assert fb.duration(205.6) == "3 min 26 s"
     assert fb.duration(3725) == "1 h 02 min"
+
+
+@pytest.mark.sumo
+def test_baseline_says_what_it_starts_and_counts_steps_after_the_warm_up(tmp_path: Path) -> None:
+    config = Path(__file__).resolve().parent.parent / "configs" / "ring_wave.yaml"
+    out = tmp_path
+    result = CliRunner().invoke(app, ["baseline", str(config), "--steps", "20", "--set",
+                                      "env.warmup_steps=30", "--out", str(out)])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert lines[0] == ("ring_wave: 1 run(s) x 20 steps after 30 warm-up steps; building the "
+                        "network and starting SUMO")  # fmt: skip
+    assert lines[-1].startswith("run folder: ") and lines[-1].endswith(" s)")
+    (metrics,) = out.glob("ring_wave/*/metrics.json")
+    data = json.loads(metrics.read_text())
+    assert data["steps_per_run"] == 20 and data["runs"][0]["steps"] == 1 + 30 + 20

@@ -106,6 +106,8 @@ def baseline(
     preflight(replace(cfg, train=None), where)  # env class and its params, at file:line
     total = resolve_steps(cfg, steps)
     feedback = Feedback(console)
+    what = f"{cfg.name}: {runs} run(s) x {steps_text(total, cfg.env.warmup_steps)}"
+    feedback.phase(f"{what}; building the network and starting SUMO")
     columns = (
         TextColumn("run {task.fields[run]}"),
         BarColumn(),
@@ -151,7 +153,7 @@ def baseline(
             if stopped is None:
                 raise
             raise interrupted_exit(stopped, "status.json and metrics.json say so") from err
-    title = f"{cfg.name}: {runs} run(s) x {total} steps"
+    title = what
     console.print(metrics_table(title, result.metrics, with_outflow=not result.signals))
     if result.signals:
         how = result.signal_controller or "the network's programs / the env's actions"
@@ -164,6 +166,12 @@ def baseline(
         if result.animation.note:
             typer.secho(f"note: {result.animation.note}", err=True, fg=typer.colors.YELLOW)
     feedback.close(f"run folder: {result.run_dir}")
+
+
+def steps_text(steps: int, warmup: int) -> str:
+    """``3000 steps`` or ``300 steps after 750 warm-up steps``: what --steps and the horizon
+    count (env steps), the warm-up apart."""
+    return f"{steps} steps" + (f" after {warmup} warm-up steps" if warmup else "")
 
 
 def register(app: typer.Typer) -> None:
