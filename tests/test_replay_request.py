@@ -56,3 +56,20 @@ def test_select_reads_the_window_and_the_vehicles(log: Path) -> None:
     assert chosen.summaries[0].first_time >= 1.0 and chosen.summaries[0].last_time <= 3.0
     with pytest.raises(RecordingError, match="no logged step within --from 900 s"):
         select(ReplayRequest([log], start=900.0))
+
+
+@pytest.mark.sumo
+def test_an_all_human_rollouts_return_reads_n_a(log: Path) -> None:
+    from rich.console import Console
+
+    from flowrun.cli.commands_replay import summary_table
+
+    policy = select(ReplayRequest([log, log]))
+    human = policy.logs[1]
+    human.all_metadata = {**human.all_metadata,
+                          "flowrun": {**human.metadata, "evaluation": "baseline"}}  # fmt: skip
+    console = Console(width=120, record=True)
+    console.print(summary_table([log, log], policy))
+    (row,) = [line for line in console.export_text().splitlines() if "│ return" in line]
+    cells = [c.strip() for c in row.split("│") if c.strip()]
+    assert cells[0] == "return" and cells[2:] == ["n/a", "n/a"] and cells[1] != "n/a"

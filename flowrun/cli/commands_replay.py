@@ -26,6 +26,7 @@ from flowrun.cli.replay_outputs import (
     intersection_table,
     replay_dir,
 )
+from flowrun.cli.tables import NA
 from flowrun.errors import RecordingError
 from flowrun.recording import repair
 from flowrun.replay import compare, summary_rows, to_csv
@@ -219,13 +220,15 @@ def warn(text: str) -> None:
 
 
 def summary_table(logs: list[Path], chosen: Selection) -> Table:
-    """One log's summary, or two side by side with their difference."""
+    """One log's summary, or two side by side with their difference. The return of an
+    evaluation's all-human rollout is ``n/a``: without the policy no RL reward is summed."""
+    human = [lg.metadata.get("evaluation") == "baseline" for lg in chosen.logs]
     if len(chosen.summaries) == 1:
         table = Table(title=chosen.summaries[0].name, show_header=False)
         table.add_column("", style="bold")
         table.add_column("")
         for label, value in summary_rows(chosen.summaries[0]).items():
-            table.add_row(label, value)
+            table.add_row(label, NA if label == "return" and human[0] else value)
         return table
     table = Table(title="flowrun replay: comparison")
     table.add_column("", style="bold")
@@ -233,6 +236,9 @@ def summary_table(logs: list[Path], chosen: Selection) -> Table:
     table.add_column(f"B: {logs[1].name}")
     table.add_column("B - A", justify="right")
     for label, (va, vb, delta) in compare(chosen.summaries[0], chosen.summaries[1]).items():
+        if label == "return" and any(human):
+            va, vb = (NA if h else v for h, v in zip(human, (va, vb), strict=True))
+            delta = NA
         table.add_row(label, va, vb, delta)
     return table
 
