@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import numpy as np
+from gymnasium.spaces import Box
 
 from flowrun.envs.merge import ETA_HEADWAY, ETA_VELOCITY, time_headway_penalty
 from flowrun.envs.rewards import desired_velocity
@@ -51,7 +52,7 @@ class MultiAgentHighwayPOEnv(NeighbourAgentsEnv):
     ``(v_lead - v) / V``, ``headway / L``, ``(v - v_follow) / V``, ``tailway / L``
     (see :func:`~flowrun.multiagent.observations.neighbour_obs`; Flow's code took the
     *leader's* headway for the third value, its docstring the AV's: the AV's is used),
-    clipped to ``[0, 1]`` / ``[-1, 1]`` (relative speeds).
+    unbounded, as Flow declared them.
     Action (per agent): one acceleration in ``[-max_decel, max_accel]`` m/s^2.
     Reward (per agent): ``max(r_v + 0.1 * min((max(h / v, 0) - 1) / 1, 0), 0)`` with ``r_v``
     the desired-velocity reward of all cars towards ``target_velocity``, ``h`` the agent's
@@ -62,6 +63,11 @@ class MultiAgentHighwayPOEnv(NeighbourAgentsEnv):
     """
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
+
+    @property
+    def agent_observation_space(self) -> Box:
+        """Five values, unbounded (Flow's declared space)."""
+        return Box(low=-np.inf, high=np.inf, shape=(5,), dtype=np.float32)
 
     def additional_command(self) -> None:
         """Flow's: mark each agent's leader and follower observed."""

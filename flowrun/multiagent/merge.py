@@ -34,8 +34,7 @@ class MultiAgentMergePOEnv(NeighbourAgentsEnv):
     Observation (per agent, 5 values): Flow's neighbour 5-vector ``v / V``,
     ``(v_lead - v) / V``, ``headway / L``, ``(v - v_follow) / V``, ``tailway / L`` with ``V``
     the network's max speed and ``L`` its length (see
-    :func:`~flowrun.multiagent.observations.neighbour_obs`), clipped to ``[0, 1]`` for
-    speeds and gaps and ``[-1, 1]`` for relative speeds (Flow declared ``[-5, 5]``).
+    :func:`~flowrun.multiagent.observations.neighbour_obs`) in Flow's bounds ``[-5, 5]``.
     Action (per agent): one acceleration in ``[-max_decel, max_accel]`` m/s^2.
     Reward (shared): ``max(r_v + 0.1 * sum_i min((max(h_i / v_i, 0) - 1) / 1, 0), 0)``, ``r_v``
     the desired-velocity reward of all cars towards ``target_velocity`` and the sum over the

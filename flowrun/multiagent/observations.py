@@ -8,10 +8,10 @@ import numpy as np
 
 from flowrun.types import FloatArray
 
-#: Bounds of the neighbour 5-vector: speed, relative leader speed, headway, relative follower
-#: speed, tailway (normalised; the same bounds as flowrun's single-agent ``MergePOEnv``).
-NEIGHBOUR_LOW = np.array([0.0, -1.0, 0.0, -1.0, 0.0], dtype=np.float32)
-NEIGHBOUR_HIGH = np.ones(5, dtype=np.float32)
+#: Bounds of the neighbour 5-vector (speed, relative leader speed, headway, relative follower
+#: speed, tailway, normalised): Flow's declared ``[-5, 5]`` (``MultiAgentMergePOEnv``)
+NEIGHBOUR_LOW = np.full(5, -5.0, dtype=np.float32)
+NEIGHBOUR_HIGH = np.full(5, 5.0, dtype=np.float32)
 
 
 def neighbour_obs(vk: Any, veh_id: str, max_speed: float, max_length: float) -> FloatArray:

@@ -53,10 +53,11 @@ class MultiAgentWaveAttenuationPOEnv(MultiAgentEnv):
     At every reset the ring length is drawn from the integers in ``ring_length`` (as the
     single-agent ``WaveAttenuationEnv``).
 
-    Observation (per agent, 3 values in [-1, 1]): ``v / 15``, ``(v_lead - v) / 15`` and the
-    bumper-to-bumper headway divided by the largest ring length (``ring_length[1]``, or the
-    ring's length when ``ring_length`` is null); a car alone on the ring is its own leader.
-    Values are clipped to [-1, 1] (Flow declared the bounds without clipping).
+    Observation (per agent, 3 values in Flow's bounds [-5, 5]): ``v / 15``,
+    ``(v_lead - v) / 15`` and the bumper-to-bumper headway divided by the largest ring length
+    (``ring_length[1]``, or the ring's length when ``ring_length`` is null); a car alone on
+    the ring is its own leader.
+    Values are clipped to those bounds (Flow declared them without clipping).
     Action (per agent): one acceleration in ``[-max_decel, max_accel]`` m/s^2.
     Reward (shared by all agents): ``4 * mean(v) / 20 - 4 * mean(|a|)`` over all cars' speeds
     and the agents' applied accelerations; 0 after a collision; the mean speed in evaluate
@@ -72,8 +73,8 @@ class MultiAgentWaveAttenuationPOEnv(MultiAgentEnv):
 
     @property
     def agent_observation_space(self) -> Box:
-        """Three values in [-1, 1] (see the class docstring)."""
-        return Box(low=-1.0, high=1.0, shape=(3,), dtype=np.float32)
+        """Three values in [-5, 5] (see the class docstring)."""
+        return Box(low=-5.0, high=5.0, shape=(3,), dtype=np.float32)
 
     @property
     def agent_action_space(self) -> Box:
@@ -126,8 +127,8 @@ class MultiAgentAccelPOEnv(MultiAgentEnv):
 
     Meant for networks whose cars stay (ring, figure eight), it also runs on open ones.
 
-    Observation (per agent, 6 values in [-1, 1]): ``x / L`` (position along the network over
-    its length), then Flow's neighbour 5-vector ``v / V``, ``(v_lead - v) / V``,
+    Observation (per agent, 6 values in Flow's bounds [-5, 5]): ``x / L`` (position along the
+    network over its length), then Flow's neighbour 5-vector ``v / V``, ``(v_lead - v) / V``,
     ``headway / L``, ``(v - v_follow) / V``, ``tailway / L`` (``V`` the network's max speed;
     see :func:`~flowrun.multiagent.observations.neighbour_obs`).
     Action (per agent): one acceleration in ``[-max_decel, max_accel]`` m/s^2.
@@ -140,8 +141,8 @@ class MultiAgentAccelPOEnv(MultiAgentEnv):
 
     @property
     def agent_observation_space(self) -> Box:
-        """Six values in [-1, 1] (see the class docstring)."""
-        return Box(low=-1.0, high=1.0, shape=(6,), dtype=np.float32)
+        """Six values in [-5, 5] (see the class docstring)."""
+        return Box(low=-5.0, high=5.0, shape=(6,), dtype=np.float32)
 
     @property
     def agent_action_space(self) -> Box:
