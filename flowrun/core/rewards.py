@@ -22,6 +22,7 @@ from flowrun.envs.flow_rewards import (
     reward_rl_opening_headways,
     rl_forward_progress,
     total_velocity,
+    veh_energy_consumption,
     vehicle_energy_consumption,
 )
 
@@ -43,5 +44,6 @@ __all__ = [
     "reward_rl_opening_headways",
     "rl_forward_progress",
     "total_velocity",
+    "veh_energy_consumption",
     "vehicle_energy_consumption",
 ]

@@ -173,6 +173,10 @@ def vehicle_energy_consumption(env: Any, veh_id: str, gain: float = 0.001) -> fl
     return -gain * float(_power(env, ids)[0]) if ids else 0.0
 
 
+#: Flow's name of :func:`vehicle_energy_consumption` (``flow.core.rewards``)
+veh_energy_consumption = vehicle_energy_consumption
+
+
 def miles_per_megajoule(env: Any, veh_ids: Any = None, gain: float = 0.001) -> float:
     """Mean of ``speed / power`` over cars with power > 0 and speed >= 0.1 m/s, in miles per
     megajoule (1 mile = 1609 m), times ``gain``."""
@@ -207,6 +211,7 @@ __all__ = [
     "punish_rl_lane_changes",
     "rl_forward_progress",
     "total_velocity",
+    "veh_energy_consumption",
     "vehicle_energy_consumption",
 ]
 
