@@ -63,9 +63,6 @@ FLOW_NAMES: dict[str, tuple[str, ...]] = {
     "flow.utils.flow_warnings": ("deprecated_attribute", "deprecated"),
     "flow.visualize.time_space_diagram": ("import_data_from_trajectory",
                                           "get_time_space_data", "plot_tsd"),
-    "flow.visualize.plot_ray_results": ("plot_progress", "create_parser"),
-    "flow.visualize.capacity_diagram_generator": ("import_data_from_csv",
-                                                  "get_capacity_data", "create_parser"),
     "flow.visualize.visualizer_rllib": ("visualizer_rllib", "create_parser"),
 }  # fmt: skip
 
@@ -86,9 +83,6 @@ NOT_YET: dict[str, tuple[str, ...]] = {
     "flow.core.util": ("makexml", "printxml"),
     "flow.utils.rllib": ("get_rllib_config", "get_rllib_pkl"),
     "flow.visualize.time_space_diagram": ("import_data_from_trajectory", "plot_tsd"),
-    "flow.visualize.plot_ray_results": ("plot_progress", "create_parser"),
-    "flow.visualize.capacity_diagram_generator": ("import_data_from_csv",
-                                                  "get_capacity_data", "create_parser"),
     "flow.visualize.visualizer_rllib": ("visualizer_rllib", "create_parser"),
 }  # fmt: skip
 
