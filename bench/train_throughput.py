@@ -65,7 +65,9 @@ def train_rate(config: str, sets: list[str], steps: int, evaluate: bool) -> tupl
     parts = ", ".join(
         f"{label} {1e6 * seconds / done:.0f}"
         for label, seconds in (
-            ("env wait", timing.env_wait), ("inference+loop", timing.inference),
+            ("env wait", timing.env_wait),
+            ("of it policy in the env processes", getattr(timing, "worker_policy", 0.0)),
+            ("inference+loop", timing.inference),
             ("updates", timing.update), ("evaluation", timing.evaluation),
         )
     )

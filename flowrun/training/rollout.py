@@ -3,11 +3,11 @@
 ``SubprocVecEnv`` costs two pipe round trips and two process wake-ups per step and runs the
 policy in the driver between them, while the env processes wait; with a fast env (the figure
 eight steps in ~0.15 ms) that loop, not SUMO, sets the pace. Here the driver sends each env
-process the policy (:class:`NumpyActorCritic`, a copy of SB3's ``MlpPolicy``) and the
+process the policy (:class:`NumpyActor`, a copy of the acting half of SB3's ``MlpPolicy``) and the
 observation statistics once per rollout; :meth:`RolloutEnv.rollout` steps ``n`` times on its
 own, sampling actions with its own seeded generator, and sends back the whole segment
-(:class:`Segment`). The driver assembles the segments into SB3's rollout buffer
-(:mod:`flowrun.training.worker_rollouts`).
+(:class:`Segment`). The driver computes the values and log-probabilities with the torch
+policy, all steps at once, and fills SB3's rollout buffer (:mod:`flowrun.training.worker_rollouts`).
 
 Observation normalisation follows ``VecNormalize`` as closely as a process that sees only its
 own env can: each process starts a rollout from the driver's statistics and updates its copy
@@ -26,8 +26,6 @@ import gymnasium
 import numpy as np
 
 from flowrun.types import FloatArray
-
-_HALF_LOG_2PI = 0.5 * float(np.log(2.0 * np.pi))
 
 
 @dataclass(frozen=True)
@@ -51,65 +49,26 @@ class Mlp:
         return x
 
 
-def fuse(actor: Mlp, critic: Mlp) -> Mlp | None:
-    """One network computing ``[actor(x), critic(x)]`` (block-diagonal layers after the
-    first), or ``None`` when their depths or activations differ."""
-    if actor.activations != critic.activations:
-        return None
-    weights, biases = [np.hstack([actor.weights[0], critic.weights[0]])], []
-    for wa, wc in zip(actor.weights[1:], critic.weights[1:], strict=True):
-        block = np.zeros((wa.shape[0] + wc.shape[0], wa.shape[1] + wc.shape[1]))
-        block[: wa.shape[0], : wa.shape[1]] = wa
-        block[wa.shape[0]:, wa.shape[1]:] = wc
-        weights.append(block)
-    for ba, bc in zip(actor.biases, critic.biases, strict=True):
-        biases.append(np.concatenate([ba, bc]))
-    return Mlp(tuple(weights), tuple(biases), actor.activations)
-
-
 @dataclass(frozen=True)
-class NumpyActorCritic:
-    """SB3's ``MlpPolicy`` (diagonal Gaussian actions) in numpy: mean action, std, value.
+class NumpyActor:
+    """The acting half of SB3's ``MlpPolicy`` (diagonal Gaussian actions) in numpy.
 
     Attributes:
-        actor: observation -> mean action (``mlp_extractor.policy_net`` + ``action_net``).
-        critic: observation -> value (``mlp_extractor.value_net`` + ``value_net``).
+        mean: observation -> mean action (``mlp_extractor.policy_net`` + ``action_net``).
         log_std: the actions' log standard deviations.
         low: the action space's lower bounds (actions are clipped to them before ``step``).
         high: its upper bounds.
     """
 
-    actor: Mlp
-    critic: Mlp
+    mean: Mlp
     log_std: FloatArray
     low: FloatArray
     high: FloatArray
-    both: Mlp | None = field(init=False, default=None)
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "both", fuse(self.actor, self.critic))
-
-    def forward(self, obs: FloatArray) -> tuple[FloatArray, float]:
-        """The mean action and the value of one observation."""
-        if self.both is None:
-            return self.actor(obs), float(self.critic(obs)[0])
-        out = self.both(obs)
-        return out[:-1], float(out[-1])
-
-    def sample(
-        self, obs: FloatArray, rng: np.random.Generator
-    ) -> tuple[FloatArray, float, float]:
-        """An action drawn for ``obs``, its value and its log-probability."""
-        mean, value = self.forward(obs)
-        noise = rng.standard_normal(mean.shape)
-        action = mean + np.exp(self.log_std) * noise
-        log_prob = (-0.5 * float(noise @ noise) - float(self.log_std.sum())
-                    - _HALF_LOG_2PI * len(mean))
-        return action, value, log_prob
-
-    def value(self, obs: FloatArray) -> float:
-        """The critic's value of ``obs``."""
-        return float(self.critic(obs)[0])
+    def sample(self, obs: FloatArray, rng: np.random.Generator) -> FloatArray:
+        """An action drawn for ``obs`` (not clipped)."""
+        mean = self.mean(obs)
+        return mean + np.exp(self.log_std) * rng.standard_normal(mean.shape)
 
 
 @dataclass
@@ -140,7 +99,7 @@ class ObsStats:
 
 @dataclass
 class Segment:
-    """One env's ``n`` steps of a rollout, as SB3's rollout buffer wants them.
+    """One env's ``n`` steps of a rollout; the driver adds SB3's values and log-probabilities.
 
     Attributes:
         obs: the observation each action was chosen on, normalised (n, obs_dim), float32.
@@ -149,13 +108,11 @@ class Segment:
         actions: the sampled actions, before clipping (n, action_dim), float32.
         rewards: the env's rewards (n,).
         dones: whether the episode ended at each step (n,).
-        values: the critic's value of ``obs`` (n,).
-        log_probs: the log-probability of each action (n,).
-        terminal_values: the value of the last observation of an episode cut by its time
-            limit, NaN elsewhere (n,).
+        timeouts: ``{step: last observation, normalised}`` of the episodes cut by their time
+            limit (SB3 bootstraps their reward with its value).
         episodes: ``(step, info)`` for each episode that ended (``info`` with ``Monitor``'s
             ``episode`` entry).
-        last_value: the value of the observation the next rollout starts from.
+        last_obs: the normalised observation the next rollout starts from.
         policy_s: seconds spent on the policy and the normalisation in the env process.
     """
 
@@ -164,11 +121,9 @@ class Segment:
     actions: np.ndarray
     rewards: np.ndarray
     dones: np.ndarray
-    values: np.ndarray
-    log_probs: np.ndarray
-    terminal_values: np.ndarray
+    timeouts: dict[int, np.ndarray] = field(default_factory=dict)
     episodes: list[tuple[int, dict[str, Any]]] = field(default_factory=list)
-    last_value: float = 0.0
+    last_obs: np.ndarray = field(default_factory=lambda: np.empty(0, np.float32))
     policy_s: float = 0.0
 
 
@@ -199,11 +154,7 @@ class RolloutEnv(gymnasium.Wrapper):
         return result
 
     def rollout(
-        self,
-        policy: NumpyActorCritic,
-        stats: ObsStats | None,
-        n_steps: int,
-        entropy: tuple[int, ...],
+        self, policy: NumpyActor, stats: ObsStats | None, n_steps: int, entropy: tuple[int, ...]
     ) -> Segment:
         """Step ``n_steps`` times with actions sampled from ``policy``, resetting at episode
         ends as ``SubprocVecEnv`` does; the samples' generator is seeded with
@@ -220,14 +171,11 @@ class RolloutEnv(gymnasium.Wrapper):
             actions=np.empty((n_steps, act_dim), np.float32),
             rewards=np.empty(n_steps, np.float64),
             dones=np.zeros(n_steps, bool),
-            values=np.empty(n_steps, np.float64),
-            log_probs=np.empty(n_steps, np.float64),
-            terminal_values=np.full(n_steps, np.nan),
         )
         obs = _normalized(raw, stats)
         for t in range(n_steps):
             start = time.perf_counter()
-            action, seg.values[t], seg.log_probs[t] = policy.sample(obs, rng)
+            action = policy.sample(obs, rng)
             seg.obs[t], seg.actions[t] = obs, action
             clipped = np.minimum(np.maximum(action, policy.low), policy.high).astype(np.float32)
             seg.policy_s += time.perf_counter() - start
@@ -245,11 +193,11 @@ class RolloutEnv(gymnasium.Wrapper):
             if stats is not None:
                 stats.update(raw)  # as VecNormalize: the statistics first, then normalise
             obs = _normalized(raw, stats)
-            if final is not None:  # bootstrapped by the driver (SB3's timeout handling)
-                seg.terminal_values[t] = policy.value(_normalized(final, stats))
+            if final is not None:
+                seg.timeouts[t] = _normalized(final, stats)
             seg.policy_s += time.perf_counter() - start
         self._obs = raw
-        seg.last_value = policy.value(obs)
+        seg.last_obs = obs
         return seg
 
 

@@ -28,6 +28,8 @@ class TrainTiming:
         env_wait: waiting for the env subprocesses' ``step``/``reset`` results.
         rollout: collecting rollouts (env waits, policy inference, callbacks, evaluations).
         update: gradient updates (between the end of a rollout and the next one).
+        worker_policy: of ``env_wait``, the policy acting in the env processes (rollouts
+            stepped there, :mod:`flowrun.training.rollout`; the slowest process's share).
         evaluation: periodic evaluations (inside ``rollout``).
         checkpoints: saving checkpoints (inside ``rollout``).
         finish: after learning (final model, checkpoint, closing the envs).
@@ -37,6 +39,7 @@ class TrainTiming:
 
     startup: float = 0.0
     env_wait: float = 0.0
+    worker_policy: float = 0.0
     rollout: float = 0.0
     update: float = 0.0
     evaluation: float = 0.0
@@ -72,6 +75,7 @@ class TrainTiming:
         data = {
             "startup_s": self.startup,
             "env_wait_s": self.env_wait,
+            "worker_policy_s": self.worker_policy,
             "inference_s": self.inference,
             "update_s": self.update,
             "evaluation_s": self.evaluation,
@@ -99,9 +103,12 @@ def timed_vec_env(venv: VecEnv, timing: TrainTiming) -> VecEnv:
         def env_method(self, method_name: str, *args: Any, **kwargs: Any) -> Any:
             start = time.perf_counter()  # whole rollouts stepped in the env processes
             try:
-                return self.venv.env_method(method_name, *args, **kwargs)
+                results = self.venv.env_method(method_name, *args, **kwargs)
             finally:
                 timing.env_wait += time.perf_counter() - start
+            if method_name == "rollout":
+                timing.worker_policy += max(segment.policy_s for segment in results)
+            return results
 
         def step_wait(self) -> Any:
             start = time.perf_counter()

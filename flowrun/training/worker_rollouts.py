@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from flowrun.training.deps import require
-from flowrun.training.rollout import Mlp, NumpyActorCritic, ObsStats, Segment
+from flowrun.training.rollout import Mlp, NumpyActor, ObsStats, Segment
 
 if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
@@ -40,8 +40,9 @@ def _subclass(cls: type[BaseAlgorithm]) -> type[BaseAlgorithm]:
     return type(cls.__name__, (WorkerRollouts, cls), {"__module__": cls.__module__})
 
 
-def numpy_actor_critic(policy: Any) -> NumpyActorCritic | None:
-    """A numpy copy of an SB3 ``ActorCriticPolicy`` MLP with Gaussian actions, or ``None``."""
+def numpy_actor(policy: Any) -> NumpyActor | None:
+    """A numpy copy of the acting half of an SB3 ``ActorCriticPolicy`` MLP with Gaussian
+    actions, or ``None`` for any other policy."""
     torch = require("torch")
     distributions = require("stable_baselines3.common.distributions")
     torch_layers = require("stable_baselines3.common.torch_layers")
@@ -51,17 +52,15 @@ def numpy_actor_critic(policy: Any) -> NumpyActorCritic | None:
         or getattr(policy, "use_sde", True)
         or getattr(policy, "squash_output", True)
         or not isinstance(policy.action_dist, distributions.DiagGaussianDistribution)
-        or not isinstance(policy.features_extractor, torch_layers.FlattenExtractor)
-        or not getattr(policy, "share_features_extractor", False)
+        or not isinstance(policy.pi_features_extractor, torch_layers.FlattenExtractor)
     ):
         return None
-    actor = _mlp([*mlp.policy_net, policy.action_net], torch.nn)
-    critic = _mlp([*mlp.value_net, policy.value_net], torch.nn)
-    if actor is None or critic is None:
+    mean = _mlp([*mlp.policy_net, policy.action_net], torch.nn)
+    if mean is None:
         return None
     space = policy.action_space
-    return NumpyActorCritic(
-        actor, critic, policy.log_std.detach().cpu().numpy().astype(np.float64),
+    return NumpyActor(
+        mean, policy.log_std.detach().cpu().numpy().astype(np.float64),
         np.asarray(space.low, np.float64), np.asarray(space.high, np.float64),
     )
 
@@ -101,10 +100,10 @@ class WorkerRollouts:
     ) -> bool:
         """SB3's ``collect_rollouts``, the steps taken in the env processes."""
         model: Any = self
-        policy = None
+        actor = None
         if getattr(env, "worker_rollouts", False) and rollout_buffer.buffer_size == n_rollout_steps:
-            policy = numpy_actor_critic(model.policy)
-        if policy is None:
+            actor = numpy_actor(model.policy)
+        if actor is None:
             return bool(super().collect_rollouts(  # type: ignore[misc]
                 env, callback, rollout_buffer, n_rollout_steps))
         model.policy.set_training_mode(False)
@@ -113,29 +112,48 @@ class WorkerRollouts:
         normalize = model.get_vec_normalize_env()
         entropy = (int(model.seed or 0), int(model.num_timesteps))
         segments: list[Segment] = env.env_method(
-            "rollout", policy, obs_stats(normalize), n_rollout_steps, entropy
+            "rollout", actor, obs_stats(normalize), n_rollout_steps, entropy
         )
-        rewards = _rewards(segments, normalize, float(model.gamma))
+        rewards = _rewards(segments, normalize)
         _fill(rollout_buffer, segments, rewards, model._last_episode_starts)
+        last_values = _evaluate(model, rollout_buffer, segments)
         last_obs = np.stack([s.next_obs[-1] for s in segments])
         dones = np.stack([s.dones for s in segments], axis=1)
-        if not _step_callbacks(model, callback, segments, rewards, dones):
+        if not _step_callbacks(model, callback, segments, rollout_buffer.rewards, dones):
             return False
         model._last_obs = last_obs if normalize is None else normalize.normalize_obs(last_obs)
         model._last_episode_starts = dones[-1]
-        torch = require("torch")
-        last_values = torch.as_tensor(np.array([s.last_value for s in segments]),
-                                      dtype=torch.float32)
         rollout_buffer.compute_returns_and_advantage(last_values=last_values, dones=dones[-1])
         callback.update_locals({"rollout_buffer": rollout_buffer, "dones": dones[-1]})
         callback.on_rollout_end()
         return True
 
 
-def _rewards(segments: list[Segment], normalize: VecNormalize | None, gamma: float) -> np.ndarray:
-    """The rewards as SB3 stores them: normalised by ``VecNormalize`` step after step (its
-    statistics updated on the way, observations' too), plus ``gamma`` times the value of a
-    timed-out episode's last observation. Shape (n_steps, n_envs), float32."""
+def _evaluate(model: Any, buffer: Any, segments: list[Segment]) -> Any:
+    """Values and log-probabilities of the buffer's steps from the torch policy, as SB3's loop
+    computes them; a timed-out episode's last reward plus ``gamma`` times the value of its
+    last observation. Returns the values of the observations the next rollout starts from."""
+    torch = require("torch")
+    policy = model.policy
+    n = buffer.buffer_size
+    obs = torch.as_tensor(buffer.observations.reshape(n * len(segments), -1))
+    actions = torch.as_tensor(buffer.actions.reshape(n * len(segments), -1))
+    with torch.no_grad():
+        values, log_probs, _ = policy.evaluate_actions(obs, actions)
+        buffer.values[:] = values.numpy().reshape(n, len(segments))
+        buffer.log_probs[:] = log_probs.numpy().reshape(n, len(segments))
+        cut = [(t, rank, o) for rank, s in enumerate(segments) for t, o in s.timeouts.items()]
+        if cut:
+            ends = policy.predict_values(torch.as_tensor(np.stack([o for _, _, o in cut])))
+            for (t, rank, _), value in zip(cut, ends.numpy().ravel(), strict=True):
+                buffer.rewards[t, rank] += model.gamma * value
+        last = np.stack([s.last_obs for s in segments])
+        return policy.predict_values(torch.as_tensor(last)).flatten()
+
+
+def _rewards(segments: list[Segment], normalize: VecNormalize | None) -> np.ndarray:
+    """The rewards normalised by ``VecNormalize`` step after step (its statistics updated on
+    the way, the observations' too). Shape (n_steps, n_envs), float32."""
     raw = np.stack([s.rewards for s in segments], axis=1)
     dones = np.stack([s.dones for s in segments], axis=1)
     rewards = raw.astype(np.float32)
@@ -149,14 +167,12 @@ def _rewards(segments: list[Segment], normalize: VecNormalize | None, gamma: flo
             normalize.returns[dones[t]] = 0
         normalize.old_obs = np.stack([s.next_obs[-1] for s in segments])
         normalize.old_reward = raw[-1]
-    terminal = np.stack([s.terminal_values for s in segments], axis=1)
-    cut = ~np.isnan(terminal)
-    rewards[cut] += (gamma * terminal[cut]).astype(np.float32)
     return rewards
 
 
 def _fill(buffer: Any, segments: list[Segment], rewards: np.ndarray, starts: np.ndarray) -> None:
-    """Write the segments into SB3's ``RolloutBuffer`` as its ``add`` would, step by step."""
+    """Write the segments into SB3's ``RolloutBuffer`` as its ``add`` would, step by step
+    (values and log-probabilities follow in :func:`_evaluate`)."""
     n = rewards.shape[0]
     dones = np.stack([s.dones for s in segments], axis=1)
     buffer.observations[:n] = np.stack([s.obs for s in segments], axis=1).reshape(
@@ -166,8 +182,6 @@ def _fill(buffer: Any, segments: list[Segment], rewards: np.ndarray, starts: np.
     buffer.rewards[:n] = rewards
     buffer.episode_starts[0] = starts
     buffer.episode_starts[1:n] = dones[:-1]
-    buffer.values[:n] = np.stack([s.values for s in segments], axis=1)
-    buffer.log_probs[:n] = np.stack([s.log_probs for s in segments], axis=1)
     buffer.pos = n
     buffer.full = n == buffer.buffer_size
 
