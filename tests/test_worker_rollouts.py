@@ -120,3 +120,32 @@ def test_numpy_copy_matches_the_torch_policy_or_declines() -> None:
         assert numpy_actor(sde.policy) is None  # SB3's own loop then
     finally:
         venv.close()
+
+
+@pytest.mark.parametrize("kind", ["LinearPolicy", "MlpPolicy"])
+def test_ars_candidates_act_with_numpy_as_the_torch_policy(kind: str) -> None:
+    import torch
+    from sb3_contrib import ARS
+
+    from flowrun.training.numpy_predict import NumpyPredictor
+
+    cfg = load_config(CONFIG, SMALL)
+    venv = make_vec_env(cfg, 1, seed=0, subprocess=False)
+    try:
+        model = ARS(kind, venv, seed=0, device="cpu",
+                    policy_kwargs={"with_bias": True} if kind == "LinearPolicy" else None)
+        predictor = NumpyPredictor(model.policy)
+        vector = torch.as_tensor(np.random.default_rng(2).normal(
+            0, 0.5, model.policy.parameters_to_vector().shape), dtype=torch.float32)
+        predictor.load_from_vector(vector)
+        obs = np.random.default_rng(0).normal(size=(6, venv.observation_space.shape[0]))
+        obs = obs.astype(np.float32)
+        expected, _ = model.policy.predict(obs, deterministic=True)
+        actions, _ = predictor.predict(obs, deterministic=True)
+        assert actions.shape == expected.shape and actions.dtype == expected.dtype
+        np.testing.assert_allclose(actions, expected, atol=1e-5)
+        assert np.abs(expected).max() > 0.1  # not all clipped to zero
+        single, _ = predictor.predict(obs[0])
+        np.testing.assert_allclose(single, expected[0], atol=1e-5)
+    finally:
+        venv.close()

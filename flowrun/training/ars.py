@@ -31,6 +31,7 @@ from stable_baselines3.common.type_aliases import MaybeCallback
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 from flowrun.config.model import ExperimentConfig
+from flowrun.training.numpy_predict import NumpyPredictor
 from flowrun.training.vecenv import EnvFactory
 
 SelfARS = TypeVar("SelfARS", bound="ARS")
@@ -120,7 +121,8 @@ def async_eval(
         )
         for rank in range(n_workers)
     ]
-    evaluator = AsyncEval(workers, model.policy, start_method="forkserver",
+    predictor: Any = NumpyPredictor(model.policy)  # acts with numpy in the workers
+    evaluator = AsyncEval(workers, predictor, start_method="forkserver",
                           n_eval_episodes=model.n_eval_episodes)  # fmt: skip
     stats = model.get_vec_normalize_env()
     if normalize and stats is not None and isinstance(stats.obs_rms, RunningMeanStd):
