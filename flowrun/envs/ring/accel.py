@@ -13,6 +13,14 @@ from gymnasium.spaces import Box
 
 from flowrun.envs.base import Env
 from flowrun.envs.rewards import desired_velocity
+from flowrun.envs.ring.tasks import (
+    AccelTask,
+    RingTask,
+    WaveTask,
+    acceleration_box,
+    clip_unit,
+    full_observation,
+)
 from flowrun.flow_values import FLOW_ERROR
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
@@ -27,12 +35,6 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
 }
 
 
-def clip_unit(x: np.ndarray) -> np.ndarray:
-    """``x`` clipped to [0, 1] in place (two ufuncs: cheaper than ``np.clip`` per step)."""
-    np.maximum(x, 0.0, out=x)
-    return np.minimum(x, 1.0, out=x)
-
-
 def fit(values: np.ndarray, size: int) -> np.ndarray:
     """``values`` cut or zero-padded to ``size`` entries (a fixed-size observation part)."""
     if values.size == size:
@@ -41,16 +43,6 @@ def fit(values: np.ndarray, size: int) -> np.ndarray:
     n = min(size, values.size)
     out[:n] = values[:n]
     return out
-
-
-def acceleration_box(additional_params: dict[str, Any], num_rl: int) -> Box:
-    """One acceleration per RL car in ``[-|max_decel|, max_accel]`` m/s^2."""
-    return Box(
-        low=-abs(float(additional_params["max_decel"])),
-        high=float(additional_params["max_accel"]),
-        shape=(num_rl,),
-        dtype=np.float32,
-    )
 
 
 class AbsolutePositions:
@@ -117,6 +109,9 @@ class RingAccelBase(Env):
     Action: one acceleration per RL car in ``[-max_decel, max_accel]`` m/s^2.
     """
 
+    #: the task's definition over a batch of rings (:mod:`flowrun.envs.ring.tasks`)
+    RING_TASK: ClassVar[type[RingTask]] = WaveTask
+
     @property
     def action_space(self) -> Box:  # type: ignore[override]
         """One acceleration per RL vehicle."""
@@ -142,8 +137,7 @@ class RingAccelBase(Env):
         if self.env_params.additional_params.get("sort_vehicles"):
             order = np.argsort(pos, kind="stable")
             speed, pos = speed[order], pos[order]
-        obs = np.concatenate([speed / self.k.network.max_speed(), pos / self.k.network.length()])
-        return clip_unit(obs)
+        return full_observation(speed, pos, self.k.network.max_speed(), self.k.network.length())
 
 
 class AccelEnv(RingAccelBase):
@@ -162,6 +156,7 @@ class AccelEnv(RingAccelBase):
     """
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
+    RING_TASK: ClassVar[type[RingTask]] = AccelTask
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self._positions = AbsolutePositions()
@@ -253,9 +248,8 @@ class AccelEnv(RingAccelBase):
         vk = self.k.vehicle
         order = self._order()
         n = self.initial_vehicles.num_vehicles
-        speed = fit(vk.speed[order] / self.k.network.max_speed(), n)
-        pos = fit(vk.position[order] / self.k.network.length(), n)
-        return clip_unit(np.concatenate([speed, pos]))
+        speed, pos = fit(vk.speed[order], n), fit(vk.position[order], n)
+        return full_observation(speed, pos, self.k.network.max_speed(), self.k.network.length())
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired-velocity reward (mean speed when ``env_params.evaluate``)."""
@@ -273,3 +267,9 @@ def desired_velocity_reward(env: Env, fail: bool) -> float:
     )
     env.reward_terms = {"desired_velocity": reward}
     return reward
+
+
+__all__ = [
+    "ADDITIONAL_ENV_PARAMS", "AbsolutePositions", "AccelEnv", "RingAccelBase",
+    "acceleration_box", "clip_unit", "desired_velocity_reward", "fit",
+]  # fmt: skip

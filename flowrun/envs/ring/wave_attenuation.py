@@ -13,6 +13,14 @@ from gymnasium.spaces import Box
 
 from flowrun.envs.rewards import wave_attenuation_terms
 from flowrun.envs.ring.accel import RingAccelBase
+from flowrun.envs.ring.tasks import (
+    V_OBS_SCALE,
+    RingBatch,
+    RingTask,
+    WavePOTask,
+    partial_observation,
+    po_observation,
+)
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
 
@@ -25,9 +33,6 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     "ring_length": [220, 270],
 }
 
-V_OBS_SCALE = 15.0  # m/s: speeds in the partial observation are divided by this
-
-
 def v_eq_max_function(v: Any, *args: float) -> Any:
     """Flow's residual for the ring's equilibrium speed with one AV (solve it for ``v``).
 
@@ -39,15 +44,6 @@ def v_eq_max_function(v: Any, *args: float) -> Any:
     num_vehicles, length = args
     s_eq_max = (length - num_vehicles * 5.0) / (num_vehicles - 1)
     return s_eq_max - (2.0 + v * 1.0) * (1.0 - (v / 30.0) ** 4) ** -0.5
-
-
-def partial_observation(v_av: Any, v_lead: Any, gap: Any, max_length: float) -> np.ndarray:
-    """The AV's view in :class:`WaveAttenuationPOEnv`: ``[v_av/15, (v_lead - v_av)/15,
-    gap/max_length]`` (speeds in m/s, gap to the leader's front bumper and length in m).
-
-    Scalars give a vector of 3; arrays of ``B`` rings give ``(3, B)`` (the numpy backend).
-    """
-    return np.array([v_av / V_OBS_SCALE, (v_lead - v_av) / V_OBS_SCALE, gap / max_length])
 
 
 def ring_bounds(additional_params: dict[str, Any]) -> tuple[int, int] | None:
@@ -162,6 +158,8 @@ class WaveAttenuationPOEnv(WaveAttenuationEnv):
     Action, reward, termination: as :class:`WaveAttenuationEnv` (one RL car expected).
     """
 
+    RING_TASK: ClassVar[type[RingTask]] = WavePOTask
+
     @property
     def observation_space(self) -> Box:  # type: ignore[override]
         """Three unbounded values (see the class docstring)."""
@@ -173,9 +171,14 @@ class WaveAttenuationPOEnv(WaveAttenuationEnv):
         rl_ids = vk.get_rl_ids()
         if not rl_ids:
             return np.zeros(3)
-        rl = rl_ids[0]
-        lead = vk.get_leader(rl) or rl
         bounds = self.ring_range()
         max_length = float(bounds[1]) if bounds is not None else self.k.network.length()
-        gap = (vk.get_x_by_id(lead) - vk.get_x_by_id(rl)) % self.k.network.length()
-        return partial_observation(vk.get_speed(rl), vk.get_speed(lead), gap, max_length)
+        length = self.k.network.length()
+        ring = RingBatch(vk.speed[:, None], vk.position[:, None], length, vk.leader)  # one ring
+        return po_observation(ring, vk.table.row(rl_ids[0]), max_length)[:, 0]
+
+
+__all__ = [
+    "V_OBS_SCALE", "WaveAttenuationEnv", "WaveAttenuationPOEnv", "partial_observation",
+    "ring_bounds", "spread_lengths", "v_eq_max_function",
+]  # fmt: skip
