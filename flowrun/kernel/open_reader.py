@@ -243,7 +243,7 @@ class OpenReader:
     def _route_continuously(self, edge_index: IntArray) -> None:
         """ContinuousRouter on any network: a car on its route's last edge gets a new route
         starting on that edge (drawn from the edge's route choices)."""
-        due = np.flatnonzero(self.table.continuous & (edge_index == self.route_end))
+        due = (self.table.continuous & (edge_index == self.route_end)).nonzero()[0]
         if not due.size:
             return
         names = self.lanes.edge_names

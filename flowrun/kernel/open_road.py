@@ -187,7 +187,7 @@ def followers_of(leader: IntArray, headway: FloatArray) -> tuple[IntArray, Float
     n = leader.shape[0]
     follower = np.full(n, -1, dtype=np.int64)
     tailway = np.full(n, np.inf)
-    led = np.flatnonzero(leader >= 0)
+    led = (leader >= 0).nonzero()[0]  # (np.flatnonzero adds a Python layer)
     if led.size:
         order = led[np.lexsort((headway[led], leader[led]))]
         lead_of = leader[order]

@@ -270,7 +270,7 @@ class VehicleCommands:
             target = np.minimum(np.maximum(state.speed + cmd * self.dt, 0.0), state.speed_limit)
             _consume(map(slow_down, ids, target.tolist(), repeat(SLOW_DOWN_DURATION)))
         elif np.count_nonzero(finite := np.isfinite(cmd)):  # (.any() adds a Python layer)
-            todo = np.flatnonzero(finite)
+            todo = finite.nonzero()[0]
             target = np.minimum(
                 np.maximum(state.speed[todo] + cmd[todo] * self.dt, 0.0), state.speed_limit[todo]
             )

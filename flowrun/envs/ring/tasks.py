@@ -47,14 +47,14 @@ class RingBatch:
         """Every car's position on its ring, m, ``(N, B)``."""
         return np.mod(self.distance, self.length)
 
-    def of_leader(self, x: FloatArray, row: int) -> FloatArray:
-        """``x`` (``(N, B)``) of the leader of car ``row`` on every ring (of the car itself
-        where it has none), ``(B,)``."""
+    def leader_of(self, row: int) -> int | tuple[IntArray, IntArray]:
+        """Where the leader of car ``row`` is on every ring (the car itself where it has
+        none), as an index into an ``(N, B)`` array: a row when every ring has the same
+        order, else (rows, columns)."""
         lead = self.leader[row]
         if lead.ndim == 0:  # every ring has the same order: a whole row
-            return x[int(lead) if lead >= 0 else row]
-        lead = np.where(lead >= 0, lead, row)
-        return x[lead, np.arange(x.shape[1])]
+            return int(lead) if lead >= 0 else row
+        return np.where(lead >= 0, lead, row), np.arange(lead.shape[0])
 
 
 def clip_unit(x: FloatArray) -> FloatArray:
@@ -88,12 +88,10 @@ def po_observation(rings: RingBatch, av: int, max_length: float) -> FloatArray:
     Args:
         rings: the rings. av: the AV's row. max_length: the largest ring length, m.
     """
-    length = rings.length
+    length, lead = rings.length, rings.leader_of(av)
     x_av = np.mod(rings.distance[av], length)
-    x_lead = np.mod(rings.of_leader(rings.distance, av), length)
-    gap = np.mod(x_lead - x_av, length)
-    v_av = rings.speed[av]
-    return partial_observation(v_av, rings.of_leader(rings.speed, av), gap, max_length)
+    gap = np.mod(np.mod(rings.distance[lead], length) - x_av, length)
+    return partial_observation(rings.speed[av], rings.speed[lead], gap, max_length)
 
 
 def acceleration_box(additional_params: dict[str, Any], num_rl: int) -> Box:
