@@ -15,11 +15,11 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from flowrun.cli.commands_run import console
-from flowrun.cli.commands_sweep import run_points
+from flowrun.cli.commands_sweep import describe_points, run_points
 from flowrun.cli.common import (
     DEFAULT_OUT,
     SeedOpt,
@@ -28,6 +28,7 @@ from flowrun.cli.common import (
     interrupted_exit,
     out_option,
 )
+from flowrun.cli.feedback import Feedback
 from flowrun.errors import ConfigError, FlowrunError
 from flowrun.experiment.benchmark import Benchmark
 from flowrun.experiment.benchmark_run import BenchmarkPlan
@@ -232,16 +233,18 @@ def _pool(commands: list[tuple[SweepPoint, list[str]]], jobs: int, failures: lis
         return
     columns = (TextColumn("benchmark"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                TextColumn("{task.fields[last]}"))  # fmt: skip
-    with Progress(*columns, console=console, transient=True,
-                  disable=not sys.stderr.isatty()) as bar:  # fmt: skip
-        task = bar.add_task("benchmark", total=len(commands), last="")
+    done = [0]
+    feedback = Feedback(console)
+    describe = describe_points("benchmark")
+    with feedback.progress(columns, describe, len(commands), last="") as update:
 
         def on_done(point: SweepPoint, code: int, last: str) -> None:
             values = dict(point.values)
             what = f"{values['benchmark']} {values['run']} seed {point.seed}"
             if code != 0:
                 failures.append(f"{what}: exit {code}: {last}")
-            bar.update(task, advance=1, last=what)
+            done[0] += 1
+            update(completed=done[0], last=what)
 
         run_points(commands, jobs, on_done)
 

@@ -15,14 +15,14 @@ from __future__ import annotations
 import os
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import AbstractContextManager, contextmanager, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from flowrun.cli.commands_run import console
@@ -37,6 +37,7 @@ from flowrun.cli.common import (
     on_stop_signals,
     overrides_with_seed,
 )
+from flowrun.cli.feedback import Feedback
 from flowrun.errors import ConfigError, FlowrunError
 from flowrun.experiment.sweep import SweepPlan, SweepPoint
 from flowrun.experiment.sweep_procs import PointProcess
@@ -325,16 +326,19 @@ def _run_sweep(
     commands = [(p, point_command(config, sets, plan, p, out, run_args)) for p in todo]
     columns = (TextColumn("sweep"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                TextColumn("{task.fields[last]}"))  # fmt: skip
-    with Progress(*columns, console=console, transient=True,
-                  disable=not sys.stderr.isatty()) as bar:  # fmt: skip
-        task = bar.add_task("sweep", total=len(plan.points), completed=skipped, last="")
+    done = [skipped]
+    feedback = Feedback(console)
+    describe = describe_points("sweep")
+    with feedback.progress(columns, describe, len(plan.points), last="") as update:
+        update(completed=skipped)
 
         def on_done(point: SweepPoint, code: int, last: str) -> None:
             if code == NOT_STARTED:
                 return
             if code != 0:
                 failures.append(f"{point.label}: exit {code}: {last}")
-            bar.update(task, advance=1, last=point.label)
+            done[0] += 1
+            update(completed=done[0], last=point.label)
 
         try:
             (runner or run_points)(commands, jobs or os.cpu_count() or 1, on_done)
@@ -417,6 +421,16 @@ def _report(plan: SweepPlan, metric: str) -> None:
         raise FlowrunError(f"cannot write sweep results in {plan.folder}: {err.strerror}") from None
     console.print(results_table(plan, rows, metric))
     console.print(f"table: {csv_path} and {md_path.name}; plot: {plot.name}")
+
+
+def describe_points(what: str) -> Callable[[Mapping[str, Any]], str]:
+    """The plain-text progress line of a pool of runs: what, and the last one finished."""
+
+    def describe(fields: Mapping[str, Any]) -> str:
+        last = fields.get("last")
+        return f"{what} (last finished: {last})" if last else what
+
+    return describe
 
 
 def register(app: typer.Typer) -> None:
