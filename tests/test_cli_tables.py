@@ -32,18 +32,19 @@ def text_of(table: object, width: int = 80) -> list[str]:
 
 
 def test_open_network_table_leads_with_outflow_and_fits_80_columns() -> None:
-    lines = text_of(metrics_table("merge", [run(departed=166, arrived=126, runs=1)]))
+    lines = text_of(metrics_table("merge", [run(departed=166, arrived=126)], [1512.4]))
     assert max(len(line) for line in lines) <= 80
     assert "…" not in "".join(lines)
     header = lines[1].split()
     assert header[:2] == ["run", "outflow"]
-    assert lines[3].split()[:2] == ["0", "1512"]  # 126 cars in 300 s = 1512 veh/h
+    assert lines[3].split()[:2] == ["0", "1512"]  # metrics.json's outflow, last 500 s
+    assert "last 500 s" in lines[-1]
 
 
 def test_ring_table_has_no_outflow_and_grid_table_leaves_it_to_the_signals() -> None:
-    assert "outflow" not in "".join(text_of(metrics_table("ring", [run()])))
+    assert "outflow" not in "".join(text_of(metrics_table("ring", [run()], [0.0])))
     grid = run(departed=10, arrived=8)
-    assert "outflow" not in "".join(text_of(metrics_table("grid", [grid], with_outflow=False)))
+    assert "outflow" not in "".join(text_of(metrics_table("grid", [grid])))
 
 
 def test_undefined_numbers_read_n_a() -> None:
@@ -116,3 +117,15 @@ def test_baseline_says_what_it_starts_and_counts_steps_after_the_warm_up(tmp_pat
     (metrics,) = out.glob("ring_wave/*/metrics.json")
     data = json.loads(metrics.read_text())
     assert data["steps_per_run"] == 20 and data["runs"][0]["steps"] == 1 + 30 + 20
+
+
+@pytest.mark.sumo
+def test_the_tables_outflow_is_metrics_json_outflow(tmp_path: Path) -> None:
+    config = Path(__file__).resolve().parent.parent / "configs" / "merge.yaml"
+    result = CliRunner().invoke(app, ["baseline", str(config), "--steps", "200", "--out",
+                                      str(tmp_path)])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    (metrics,) = tmp_path.glob("merge/*/metrics.json")
+    outflow = json.loads(metrics.read_text())["runs"][0]["outflow"]
+    row = next(line for line in result.stdout.splitlines() if line.split()[:1] == ["0"])
+    assert row.split()[1] == f"{outflow:.0f}"

@@ -154,7 +154,8 @@ def baseline(
                 raise
             raise interrupted_exit(stopped, "status.json and metrics.json say so") from err
     title = what
-    console.print(metrics_table(title, result.metrics, with_outflow=not result.signals))
+    outflows = [] if result.signals else result.outflows
+    console.print(metrics_table(title, result.metrics, outflows))
     if result.signals:
         how = result.signal_controller or "the network's programs / the env's actions"
         console.print(signals_table(f"signal control: {how}", result.signals))

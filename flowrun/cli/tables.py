@@ -38,25 +38,22 @@ def is_open(m: Any) -> bool:
     return bool(getattr(m, "departed", 0) or getattr(m, "arrived", 0))
 
 
-def outflow(m: Any) -> float:
-    """Cars that left the network per hour of simulated time (veh/h); ``nan`` without time."""
-    return m.arrived * 3600.0 / m.duration if m.duration > 0 else math.nan
-
-
-def metrics_table(title: str, rows: list[Any], with_outflow: bool = True) -> Table:
+def metrics_table(title: str, rows: list[Any], outflows: Sequence[float] = ()) -> Table:
     """The baseline table: one row per run (:class:`~flowrun.experiment.metrics.RunMetrics`).
 
-    On an open network its headline metric comes first after the run: the outflow (cars
-    that left per hour of simulated time) — unless ``with_outflow`` is false (a network with
-    traffic lights, whose signal table measures its throughput).
+    On an open network its headline metric comes first after the run: ``outflows``, each
+    run's outflow over its last 500 s as ``metrics.json`` has it (Flow's; leave them out on
+    a network with traffic lights, whose signal table measures its throughput).
     """
-    opened = with_outflow and any(is_open(m) for m in rows)
+    opened = bool(outflows) and any(is_open(m) for m in rows)
     columns = ["run", *(("outflow",) if opened else ()), "mean", "2nd half",
                "std", "min", "return", "crashes", "teleports"]  # fmt: skip
-    caption = "speeds in m/s; std: across cars" + ("; outflow: veh/h" if opened else "")
+    caption = "speeds in m/s; std: across cars"
+    if opened:
+        caption += "; outflow: veh/h, last 500 s"
     table = new_table(title, columns, caption)
-    for m in rows:
-        flow = (number(outflow(m), ".0f"),) if opened else ()
+    for i, m in enumerate(rows):
+        flow = (number(outflows[i] if i < len(outflows) else None, ".0f"),) if opened else ()
         table.add_row(
             str(m.run),
             *flow,

@@ -58,6 +58,8 @@ class BaselineResult:
             or the environment's actions).
         animation: with ``render``: run 0's ``render.gif`` (and ``render.mp4`` where ffmpeg
             is installed, else a note why not).
+        outflows: each run's outflow over its last :data:`OUTFLOW_WINDOW` s, veh/h (Flow's
+            ``outflows``; ``metrics.json`` writes it as each run's ``outflow``).
     """
 
     run_dir: Path
@@ -67,6 +69,7 @@ class BaselineResult:
     signals: list[SignalMetrics] = field(default_factory=list)
     signal_controller: str | None = None
     animation: Animation | None = None
+    outflows: list[float] = field(default_factory=list)
 
 
 def resolve_steps(cfg: ExperimentConfig, steps: int | None) -> int:
@@ -251,7 +254,7 @@ def _run(
     signal_runs = signals.results if signals is not None else []
     return BaselineResult(
         run_dir, experiment.metrics, logs, COMPLETE, signal_runs, cfg.traffic_lights.controller,
-        animation,
+        animation, list(hooks.outflows),
     )  # fmt: skip
 
 
