@@ -192,7 +192,7 @@ def test_registry_knows_flows_class_names_and_lists_parameters() -> None:
     table = {name: (cls, params) for name, cls, params in network_table()}
     assert set(table) == {"ring", "figure_eight", "merge", "highway", "template",
                           "traffic_light_grid", "bottleneck", "highway_ramps",
-                          "i210_subnetwork", "minicity"}  # fmt: skip
+                          "i210_subnetwork", "minicity", "multi_ring"}  # fmt: skip
     assert table["highway"][1]["boundary_cell_length"] == 500
     assert table["merge"][0] == "MergeNetwork"
 
@@ -318,7 +318,7 @@ def test_list_networks_shows_each_type_with_its_parameters() -> None:
     lines = {line.split()[0]: line for line in result.stdout.splitlines()}
     assert set(lines) == {"ring", "figure_eight", "merge", "highway", "template",
                           "traffic_light_grid", "bottleneck", "highway_ramps",
-                          "i210_subnetwork", "minicity"}  # fmt: skip
+                          "i210_subnetwork", "minicity", "multi_ring"}  # fmt: skip
     assert "radius_ring=30" in lines["figure_eight"]
     assert (
         "use_ghost_edge=false" in lines["highway"]
