@@ -59,6 +59,8 @@ def make_flow_env(
     cls = flow.env_class if flow.env_class is not None else env_class(cfg)
     sim = dataclasses.replace(cfg.sim, render=render or cfg.sim.render)  # or a mode
     env_params = dataclasses.replace(cfg.env, evaluate=True) if evaluate else cfg.env
+    if flow.env_class is not None:  # the env gets the EnvParams as given (Flow's have no class)
+        env_params = dataclasses.replace(env_params, env_class=None)
     env: Env = cls(
         env_params,
         sim,
