@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from dataclasses import replace
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.console import Console
@@ -29,6 +29,10 @@ from flowrun.cli.common import (
 from flowrun.cli.feedback import Feedback
 from flowrun.cli.tables import metrics_table, signals_table
 from flowrun.errors import FlowrunError
+
+if TYPE_CHECKING:
+    from flowrun.config.model import ExperimentConfig
+    from flowrun.experiment.baseline import BaselineResult
 
 __all__ = [  # the shared options, re-exported for the commands that import them from here
     "AnyConfigArg",
@@ -100,7 +104,7 @@ def baseline(
     Ctrl-C or SIGTERM finishes the logs and exits 130 / 143.
     """
     from flowrun.config.preflight import preflight
-    from flowrun.experiment.baseline import resolve_steps, run_baseline
+    from flowrun.experiment.baseline import resolve_steps
 
     cfg, where = load_located(config, overrides_with_seed(set_, seed))
     preflight(replace(cfg, train=None), where)  # env class and its params, at file:line
@@ -108,6 +112,20 @@ def baseline(
     feedback = Feedback(console)
     what = f"{cfg.name}: {runs} run(s) x {steps_text(total, cfg.env.warmup_steps)}"
     feedback.phase(f"{what}; building the network and starting SUMO")
+    options = dict(runs=runs, steps=steps, out=out, record=not no_record,
+                   record_every=record_every, scene=scene, render=render, argv=sys.argv,
+                   folder=folder)  # fmt: skip
+    result = _run_with_progress(feedback, cfg, runs, total, options)
+    _show_result(result, what)
+    feedback.close(f"run folder: {result.run_dir}")
+
+
+def _run_with_progress(
+    feedback: Feedback, cfg: ExperimentConfig, runs: int, total: int, options: dict[str, Any]
+) -> BaselineResult:
+    """``run_baseline`` with a progress display; Ctrl-C/SIGTERM exit 130/143."""
+    from flowrun.experiment.baseline import run_baseline
+
     columns = (
         TextColumn("run {task.fields[run]}"),
         BarColumn(),
@@ -129,19 +147,7 @@ def baseline(
             check_stop()
 
         try:
-            result = run_baseline(
-                cfg,
-                runs=runs,
-                steps=steps,
-                out=out,
-                record=not no_record,
-                record_every=record_every,
-                scene=scene,
-                render=render,
-                argv=sys.argv,
-                progress=progress,
-                folder=folder,
-            )
+            return run_baseline(cfg, progress=progress, **options)
         except KeyboardInterrupt as err:
             raise interrupted_exit(
                 err, "logs finished; status.json and metrics.json say so"
@@ -153,7 +159,10 @@ def baseline(
             if stopped is None:
                 raise
             raise interrupted_exit(stopped, "status.json and metrics.json say so") from err
-    title = what
+
+
+def _show_result(result: BaselineResult, title: str) -> None:
+    """The runs' table (the signals' too on a network with traffic lights), the animation."""
     outflows = [] if result.signals else result.outflows
     console.print(metrics_table(title, result.metrics, outflows))
     if result.signals:
@@ -166,7 +175,6 @@ def baseline(
         )
         if result.animation.note:
             typer.secho(f"note: {result.animation.note}", err=True, fg=typer.colors.YELLOW)
-    feedback.close(f"run folder: {result.run_dir}")
 
 
 def steps_text(steps: int, warmup: int) -> str:
