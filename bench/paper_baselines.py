@@ -21,6 +21,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIGS = ROOT / "configs" / "benchmarks"
@@ -42,6 +43,9 @@ _LIGHTS = ", ".join(
 )
 _GRID_PAPER_LIGHTS = f"traffic_lights={{lights: [{_LIGHTS}]}}"
 _GRID_DEPART_MAX = tuple(f"network.inflows.{i}.depart_speed=max" for i in range(12))
+#: Not an override: Flow 2018's rule that its controllers command cars on junction-internal
+#: lanes too (Flow leaves them to SUMO since 2019, as flowrun does); run by :func:`junction_run`.
+JUNCTION_RULE = ("<Flow 2018: controllers on junction lanes>",)
 
 #: (benchmark, label, overrides on top of the benchmark's baseline), cumulative per benchmark.
 VARIANTS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
@@ -50,6 +54,11 @@ VARIANTS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
         "figureeight0",
         "Flow's later vehicles: accel 2.6, decel 4.5, minGap 2.5, noise 0.2",
         _FLOW_LATER_F8,
+    ),
+    (
+        "figureeight0",
+        "the paper's vehicles + Flow 2018's controllers on junction lanes too",
+        JUNCTION_RULE,
     ),
     ("merge0", "flowrun (Flow's later vehicles, 750 x 2 x 0.5 s)", ()),
     ("merge0", "+ the paper's 750 x 5 x 0.5 s", ("env.sims_per_step=5",)),
@@ -84,10 +93,42 @@ VARIANTS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
 )
 
 
+def junction_run(seed: int) -> float:
+    """figureeight0's baseline (mean over the 1500 steps of the mean speed) with every car's
+    controller commanding it on junction-internal lanes as well (flowrun's kernel patched)."""
+    import numpy as np
+
+    import flowrun.kernel.state as state
+    from flowrun.config.loader import load_config
+    from flowrun.envs.factory import make_env
+    from flowrun.experiment.benchmark import BENCHMARKS
+
+    def command_all(self: object, acc: Any, idx: Any) -> Any:
+        return acc
+
+    state.OpenState.commandable = command_all  # type: ignore[method-assign]
+    state.RingState.commandable = command_all  # type: ignore[method-assign]
+    overrides = list(BENCHMARKS["figureeight0"].baseline)
+    env = make_env(load_config(CONFIGS / "figureeight0.yaml", overrides))
+    try:
+        env.reset(seed=seed)
+        speeds = []
+        for _ in range(1500):
+            env.step(None)
+            speeds.append(float(np.mean(env.k.vehicle.get_speed(env.k.vehicle.get_ids()))))
+    finally:
+        env.close()
+    return statistics.fmean(speeds)
+
+
 def measure(name: str, sets: tuple[str, ...], seed: int, out: Path) -> float:
     """The benchmark metric of one ``flowrun baseline`` run."""
     from flowrun.experiment.benchmark import BENCHMARKS
 
+    if sets == JUNCTION_RULE:  # its own process: the patch must not reach other runs
+        cmd = [sys.executable, __file__, "--junction-run", str(seed)]
+        done = subprocess.run(cmd, check=True, capture_output=True, text=True, cwd=ROOT)
+        return float(done.stdout.split()[-1])
     bench = BENCHMARKS[name]
     overrides = [*bench.baseline, *sets]
     if name == "grid0" and sets:  # the paper's own lights instead of SUMO's default actuated
@@ -107,7 +148,11 @@ def main() -> None:
     parser.add_argument("benchmarks", nargs="*", default=["figureeight0", "merge0",
                                                           "bottleneck0", "grid0"])  # fmt: skip
     parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--junction-run", type=int, default=None, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.junction_run is not None:
+        print(junction_run(args.junction_run))
+        return
     print(f"seeds 0-{args.seeds - 1}; mean +- std (per-seed values)\n")
     print("| benchmark | set-up | metric |")
     print("|---|---|---|")
