@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -45,6 +46,8 @@ def _train(out: Path, seed: int, extra: tuple[str, ...] = ()) -> Path:
 def _weights(run: Path) -> list[float]:
     from sb3_contrib import ARS
 
+    with zipfile.ZipFile(run / "final_model.zip") as saved:  # nothing of the live process
+        assert "should_stop" not in json.loads(saved.read("data"))
     model = ARS.load(run / "final_model.zip", device="cpu")
     return [float(x) for x in model.weights.cpu().numpy()]
 

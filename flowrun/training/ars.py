@@ -73,6 +73,11 @@ class ARS(sb3_contrib.ARS):
         callback.on_training_end()
         return self
 
+    def _excluded_save_params(self) -> list[str]:
+        """``should_stop`` belongs to the running process, never to the saved model."""
+        excluded: list[str] = super()._excluded_save_params()
+        return [*excluded, "should_stop"]
+
     def _stopping(self) -> bool:
         return self.should_stop is not None and self.should_stop()
 
