@@ -66,7 +66,7 @@ def test_config_has_flows_env_horizon_step_and_spaces(name: str) -> None:
     assert cfg.name == name
     assert (cfg.env.env_class, cfg.env.horizon, cfg.sim.sim_step) == (env_class, horizon, step)
     assert (cfg.env.sims_per_step, cfg.env.warmup_steps) == (sims, warmup)
-    assert cfg.train is not None and cfg.train.algorithm == "PPO"
+    assert cfg.train is not None and cfg.train.algorithm in ("PPO", "TRPO", "ARS")
     env = make_env(cfg)
     try:
         assert env.observation_space.shape == (n_obs,)

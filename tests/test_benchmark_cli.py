@@ -73,9 +73,17 @@ def test_train_adds_the_trained_policys_score(tmp_path: Path) -> None:
     policy = row["policy"]
     assert policy["status"] == "complete" and len(policy["values"]) == 1
     assert all(math.isfinite(v) for v in policy["values"])
-    # the score is the evaluation's mean speed, episode by episode, in evaluate mode
-    evaluation = data["folder"] / policy["eval"]
+    # each training seed's score: the mean over the 5 evaluation episodes (seeds never used
+    # in training), in evaluate mode, beside the baseline on the same seeds
+    (seed,) = policy["seeds"]
+    evaluation = data["folder"] / seed["eval"]
     episodes = json.loads((evaluation / "metrics.json").read_text())["policy"]
-    assert policy["values"] == [e["mean_speed"] for e in episodes]
-    assert yaml.safe_load((evaluation / "config.yaml").read_text())["env"]["evaluate"] is True
-    assert (data["folder"] / policy["train_run"] / "final_model.zip").is_file()
+    assert seed["episodes"] == [e["mean_speed"] for e in episodes] and len(episodes) == 5
+    assert policy["values"] == [pytest.approx(sum(seed["episodes"]) / 5)]
+    config = yaml.safe_load((evaluation / "config.yaml").read_text())
+    assert config["env"]["evaluate"] is True and config["sim"]["seed"] == 1_000_000
+    assert [r["seed"] for r in row["baseline"]["runs"]] == list(range(1_000_000, 1_000_005))
+    assert (data["folder"] / seed["train_run"] / "final_model.zip").is_file()
+    record = json.loads((data["folder"] / seed["result"]).read_text())
+    assert record["benchmark"] == "figureeight0" and record["train_seed"] == 0
+    assert record["policy"] == seed["episodes"] and len(record["baseline"]) == 5

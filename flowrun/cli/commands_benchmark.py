@@ -155,8 +155,9 @@ def benchmark(
         bool,
         typer.Option(
             "--train",
-            help="Also train each benchmark's policy (its train: section, PPO by default) and "
-            "score it over the same seeds.",
+            help="Also train each benchmark's policy (its train: section) once per seed and "
+            "score each on 5 evaluation episodes (seeds 1000000-1000004, never used in "
+            "training) beside the baseline on the same episodes.",
         ),
     ] = False,
     configs: Annotated[
@@ -204,19 +205,20 @@ def _run(plan: BenchmarkPlan, jobs: int) -> None:
 
     failures: list[str] = []
     first = [(_point(b, "baseline", s), br.baseline_command(plan, b, s))
-             for b in plan.benchmarks for s in plan.seeds]  # fmt: skip
+             for b in plan.benchmarks for s in plan.baseline_seeds]  # fmt: skip
     if plan.train:
-        first += [(_point(b, "train", plan.seeds[0]), br.train_command(plan, b))
-                  for b in plan.benchmarks]  # fmt: skip
+        first += [(_point(b, "train", s), br.train_command(plan, b, s))
+                  for b in plan.benchmarks for s in plan.seeds]  # fmt: skip
     try:
         _pool(first, jobs, failures)
         if plan.train:
             second = []
             for bench in plan.benchmarks:
-                run_dir = br.train_run(plan, bench)
-                if run_dir is not None:
-                    second.append((_point(bench, "policy", plan.seeds[0]),
-                                   br.policy_command(plan, bench, run_dir)))  # fmt: skip
+                for s in plan.seeds:
+                    run_dir = br.train_run(plan, bench, s)
+                    if run_dir is not None:
+                        second.append((_point(bench, "policy", s),
+                                       br.policy_command(plan, bench, s, run_dir)))  # fmt: skip
             _pool(second, jobs, failures)
     except KeyboardInterrupt as err:
         _report(plan, "interrupted")
