@@ -54,3 +54,19 @@ def test_progress_columns_are_plotted_and_unknown_ones_listed(tmp_path: Path) ->
         plot_progress(path, [])
     args = progress_parser().parse_args([str(path), "a", "b"])
     assert args.columns == ["a", "b"]
+
+
+def test_rllib_trial_files_are_read_from_the_checkpoint_or_its_parent(tmp_path: Path) -> None:
+    import json
+    import pickle
+
+    from flowrun.utils.rllib import get_rllib_config, get_rllib_pkl
+
+    (tmp_path / "params.json").write_text(json.dumps({"env": "MergePOEnv-v0", "gamma": 0.99}))
+    (tmp_path / "params.pkl").write_bytes(pickle.dumps({"env_config": {"flow_params": "{}"}}))
+    checkpoint = tmp_path / "checkpoint_000010"
+    checkpoint.mkdir()
+    assert get_rllib_config(checkpoint) == {"env": "MergePOEnv-v0", "gamma": 0.99}
+    assert get_rllib_pkl(tmp_path)["env_config"] == {"flow_params": "{}"}
+    with pytest.raises(ValueError, match=r"no params\.json in"):
+        get_rllib_config(checkpoint / "nested")
