@@ -19,7 +19,6 @@ from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsed
 from rich.table import Table
 
 from flowrun.cli.commands_run import console
-from flowrun.cli.commands_sweep import describe_points, run_points
 from flowrun.cli.common import (
     DEFAULT_OUT,
     SeedOpt,
@@ -29,6 +28,7 @@ from flowrun.cli.common import (
     out_option,
 )
 from flowrun.cli.feedback import Feedback
+from flowrun.cli.points import describe_points, run_points
 from flowrun.errors import ConfigError, FlowrunError
 from flowrun.experiment.benchmark import Benchmark
 from flowrun.experiment.benchmark_run import BenchmarkPlan
