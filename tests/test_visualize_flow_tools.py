@@ -70,3 +70,19 @@ def test_rllib_trial_files_are_read_from_the_checkpoint_or_its_parent(tmp_path: 
     assert get_rllib_pkl(tmp_path)["env_config"] == {"flow_params": "{}"}
     with pytest.raises(ValueError, match=r"no params\.json in"):
         get_rllib_config(checkpoint / "nested")
+
+
+def test_flows_xml_helpers_write_a_sumo_schema_file(tmp_path: Path) -> None:
+    import xml.etree.ElementTree as ET
+
+    from flowrun.core.util import makexml, printxml
+
+    routes = makexml("routes", "http://sumo.dlr.de/xsd/routes_file.xsd")
+    routes.append(ET.Element("route", {"id": "r0", "edges": "a b"}))
+    path = tmp_path / "x.rou.xml"
+    printxml(routes, path)
+    text = path.read_text()
+    assert text.startswith("<?xml version='1.0' encoding='UTF-8'?>")
+    assert 'xsi:noNamespaceSchemaLocation="http://sumo.dlr.de/xsd/routes_file.xsd"' in text
+    root = ET.parse(path).getroot()
+    assert root.tag == "routes" and root.find("route").get("edges") == "a b"
