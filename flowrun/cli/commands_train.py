@@ -265,12 +265,7 @@ def _evaluate_and_show(
     if evaluate_run is evaluate:
         model_path(run_dir, model)  # no model: say so before any note about the run
     horizon = run_cfg.env.horizon
-    state = run_state(run_dir)
-    if state != "complete":
-        what = {"running": "is still training", "cut": "was cut off (killed while training)",
-                "interrupted": "was interrupted", "failed": "failed"}[state]
-        console.print(f"[yellow]note[/]: {run_dir} {what}; evaluating its saved model anyway "
-                      f"(metrics.json records run_status: {state})")
+    _note_unfinished(run_dir, run_state(run_dir))
     columns = (TextColumn("{task.fields[label]} episode {task.fields[episode]}"), BarColumn(),
                MofNCompleteColumn(), TimeRemainingColumn())  # fmt: skip
 
@@ -305,6 +300,16 @@ def _evaluate_and_show(
     title = f"{run_dir.name}: {result.model.name}, {episodes} episode(s)"
     console.print(compare_table(title, _rows(result.policy), _rows(result.baseline)))
     return Path(result.out_dir)
+
+
+def _note_unfinished(run_dir: Path, state: str) -> None:
+    """Say so when the evaluated run did not finish training."""
+    if state == "complete":
+        return
+    what = {"running": "is still training", "cut": "was cut off (killed while training)",
+            "interrupted": "was interrupted", "failed": "failed"}[state]  # fmt: skip
+    console.print(f"[yellow]note[/]: {run_dir} {what}; evaluating its saved model anyway "
+                  f"(metrics.json records run_status: {state})")  # fmt: skip
 
 
 def _rows(runs: list[RunMetrics]) -> list[dict[str, Any]]:
