@@ -78,7 +78,6 @@ OUT_OF_SCOPE: dict[tuple[str, str], str] = {
 
 #: Missing today (each a piece of work, not a choice).
 NOT_YET: dict[str, tuple[str, ...]] = {
-    "flow.envs.multiagent": ("I210MultiEnv",),
     "flow.core.rewards": ("miles_per_gallon",),
     "flow.visualize.time_space_diagram": ("import_data_from_trajectory", "plot_tsd"),
     "flow.visualize.visualizer_rllib": ("visualizer_rllib", "create_parser"),

@@ -39,6 +39,7 @@ MULTIAGENT_ENVS: dict[str, str] = {
     "MultiAgentWaveAttenuationPOEnv": "flowrun.multiagent.ring:MultiAgentWaveAttenuationPOEnv",
     "MultiWaveAttenuationPOEnv": "flowrun.multiagent.rings:MultiWaveAttenuationPOEnv",
     "AdversarialAccelEnv": "flowrun.multiagent.adversarial:AdversarialAccelEnv",
+    "I210MultiEnv": "flowrun.multiagent.i210:I210MultiEnv",
     "MultiAgentAccelPOEnv": "flowrun.multiagent.ring:MultiAgentAccelPOEnv",
     "MultiAgentMergePOEnv": "flowrun.multiagent.merge:MultiAgentMergePOEnv",
     "MultiAgentHighwayPOEnv": "flowrun.multiagent.highway:MultiAgentHighwayPOEnv",

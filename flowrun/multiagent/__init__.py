@@ -16,6 +16,7 @@ __all__ = [
     "INSTALL_HINT",
     "MULTIAGENT_ENVS",
     "AdversarialAccelEnv",
+    "I210MultiEnv",
     "MultiAgentAccelPOEnv",
     "MultiAgentEnv",
     "MultiAgentHighwayPOEnv",

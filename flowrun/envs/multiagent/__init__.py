@@ -14,6 +14,7 @@ import flowrun.multiagent as _multiagent
 
 __all__ = [
     "AdversarialAccelEnv",
+    "I210MultiEnv",
     "MultiAgentAccelPOEnv",
     "MultiAgentHighwayPOEnv",
     "MultiAgentMergePOEnv",
