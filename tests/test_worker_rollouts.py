@@ -149,3 +149,43 @@ def test_ars_candidates_act_with_numpy_as_the_torch_policy(kind: str) -> None:
         np.testing.assert_allclose(single, expected[0], atol=1e-5)
     finally:
         venv.close()
+
+
+def test_lean_async_eval_plays_candidates_as_sb3_contribs_async_eval() -> None:
+    import torch
+    from sb3_contrib import ARS
+    from sb3_contrib.common.vec_env.async_eval import AsyncEval
+
+    from flowrun.training.ars import WorkerEnv
+    from flowrun.training.numpy_predict import LeanAsyncEval
+    from flowrun.training.vecenv import EnvFactory
+
+    cfg = load_config(CONFIG, ["env.horizon=60", "env.warmup_steps=0"])
+    venv = make_vec_env(cfg, 1, seed=0, subprocess=False)
+    model = ARS("LinearPolicy", venv, seed=0, device="cpu", policy_kwargs={"with_bias": True})
+    venv.close()
+    n_params = model.policy.parameters_to_vector().shape[0]
+    weights = torch.as_tensor(np.random.default_rng(3).normal(0, 0.3, (4, n_params)),
+                              dtype=torch.float32)
+    workers = [WorkerEnv(EnvFactory(cfg), 7 + rank, True) for rank in range(2)]
+    outcomes = []
+    for cls in (AsyncEval, LeanAsyncEval):
+        evaluator = (AsyncEval(workers, model.policy, start_method="forkserver")
+                     if cls is AsyncEval else LeanAsyncEval(workers, model.policy))
+        try:
+            results = []
+            for _ in range(2):  # twice: the envs and statistics carry on between updates
+                evaluator.send_jobs(weights, 4)
+                results.append(sorted(evaluator.get_results(), key=lambda r: r[0]))
+            outcomes.append((results, evaluator.get_obs_rms()))
+        finally:
+            evaluator.close()
+    (sb3_results, sb3_rms), (lean_results, lean_rms) = outcomes
+    for sb3_update, lean_update in zip(sb3_results, lean_results, strict=True):
+        for (i, (r1, l1)), (j, (r2, l2)) in zip(sb3_update, lean_update, strict=True):
+            assert i == j and list(l1) == list(l2) == [60]
+            np.testing.assert_allclose(r2, r1, rtol=1e-4)
+    for a, b in zip(sb3_rms, lean_rms, strict=True):
+        assert a.count == b.count  # 2 candidates x 2 updates x (1 reset + 60 steps)
+        np.testing.assert_allclose(b.mean, a.mean, rtol=1e-5)
+        np.testing.assert_allclose(b.var, a.var, rtol=1e-4)

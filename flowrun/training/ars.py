@@ -31,7 +31,7 @@ from stable_baselines3.common.type_aliases import MaybeCallback
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 from flowrun.config.model import ExperimentConfig
-from flowrun.training.numpy_predict import NumpyPredictor
+from flowrun.training.numpy_predict import LeanAsyncEval
 from flowrun.training.vecenv import EnvFactory
 
 SelfARS = TypeVar("SelfARS", bound="ARS")
@@ -118,7 +118,7 @@ def async_eval(
     Worker ``rank``'s env is seeded ``seed + rank``; with ``normalize`` the workers start from
     the model's observation statistics (a resumed run's included).
     """
-    workers: list[Callable[[], VecEnv]] = [
+    workers: list[WorkerEnv] = [
         WorkerEnv(
             EnvFactory(cfg, None if monitor_dir is None else str(monitor_dir / f"env_{rank}")),
             seed + rank,
@@ -126,9 +126,8 @@ def async_eval(
         )
         for rank in range(n_workers)
     ]
-    predictor: Any = NumpyPredictor(model.policy)  # acts with numpy in the workers
-    evaluator = AsyncEval(workers, predictor, start_method="forkserver",
-                          n_eval_episodes=model.n_eval_episodes)  # fmt: skip
+    # the workers play the episodes on their env with a numpy copy of each candidate
+    evaluator = LeanAsyncEval(workers, model.policy, n_eval_episodes=model.n_eval_episodes)
     stats = model.get_vec_normalize_env()
     if normalize and stats is not None and isinstance(stats.obs_rms, RunningMeanStd):
         evaluator.sync_obs_rms(stats.obs_rms.copy())

@@ -6,16 +6,24 @@ step: about 0.1 ms of torch for a linear policy, as long as a figure-eight step.
 :class:`NumpyPredictor` given to ``AsyncEval`` instead of the policy loads the weights into the
 torch policy and into a numpy copy, and answers ``predict`` with the copy (the torch policy
 when the copy cannot be made: a discrete action space, a layer other than Linear, Tanh, ReLU).
+:class:`LeanAsyncEval` goes further: its workers play the episodes on the env itself.
+
+This module imports sb3-contrib at import time (as :mod:`flowrun.training.ars`, its user).
 """
 
 from __future__ import annotations
 
-from typing import Any
+import multiprocessing as mp
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
 
 import numpy as np
+from sb3_contrib.common.vec_env.async_eval import AsyncEval
+from stable_baselines3.common.running_mean_std import RunningMeanStd
+from stable_baselines3.common.vec_env.base_vec_env import CloudpickleWrapper
 
 from flowrun.training.deps import require
-from flowrun.training.rollout import Mlp
+from flowrun.training.rollout import Mlp, ObsStats
 
 ACTIVATIONS = {"Tanh": "tanh", "ReLU": "relu"}
 
@@ -91,3 +99,135 @@ class NumpyPredictor:
         if obs.shape == self.policy.observation_space.shape:
             actions = actions[0]  # one observation, one action
         return actions, None
+
+
+class WorkerSpec(Protocol):
+    """What :class:`LeanAsyncEval` needs of a worker's environment description."""
+
+    @property
+    def factory(self) -> Callable[[], Any]:
+        """Builds the env (in its ``Monitor``)."""
+
+    @property
+    def seed(self) -> int:
+        """The env's first reset seed."""
+
+    @property
+    def normalize(self) -> bool:
+        """Normalise observations (statistics updated, as ``VecNormalize`` does)."""
+
+
+class LeanAsyncEval(AsyncEval):
+    """sb3-contrib's ``AsyncEval`` whose workers play each candidate's episodes on the env
+    itself with :class:`NumpyPredictor`, instead of ``evaluate_policy`` through a
+    ``DummyVecEnv`` and a ``VecNormalize`` (which cost about as much as a figure-eight step).
+
+    The env sees the same calls (a reset before each candidate, a reset after each episode),
+    the observation statistics get the same updates with ``RunningMeanStd``'s arithmetic
+    (``VecNormalize``'s clip 10 and epsilon 1e-8), and a candidate's return is ``Monitor``'s,
+    as ``evaluate_policy`` reports it.
+    """
+
+    def __init__(
+        self, workers: Sequence[WorkerSpec], policy: Any, n_eval_episodes: int = 1
+    ) -> None:
+        ctx = mp.get_context("forkserver")
+        self.waiting = False
+        self.closed = False
+        pipes = [ctx.Pipe() for _ in workers]
+        self.remotes = [parent for parent, _ in pipes]
+        self.processes = []
+        for (parent, child), spec in zip(pipes, workers, strict=True):
+            process = ctx.Process(
+                target=_lean_worker, daemon=True,
+                args=(child, parent, CloudpickleWrapper((spec, policy, n_eval_episodes))),
+            )
+            process.start()
+            self.processes.append(process)
+            child.close()
+
+
+class _Candidates:
+    """One ``LeanAsyncEval`` worker's env, statistics and policy."""
+
+    def __init__(self, spec: WorkerSpec, policy: Any, episodes: int) -> None:
+        self.env = spec.factory()
+        self.next_seed: int | None = spec.seed
+        self.options: dict[str, Any] | None = None
+        self.predictor = NumpyPredictor(policy)
+        self.episodes = episodes
+        self.stats: ObsStats | None = None
+        if spec.normalize:
+            dim = int(np.prod(self.env.observation_space.shape))
+            self.stats = ObsStats(np.zeros(dim), np.ones(dim), 1e-4, 10.0, 1e-8)
+
+    def reset(self) -> np.ndarray:
+        kwargs = {"options": self.options} if self.options else {}
+        obs, _ = self.env.reset(seed=self.next_seed, **kwargs)
+        self.next_seed, self.options = None, None  # once, as DummyVecEnv
+        return self._seen(obs)
+
+    def _seen(self, obs: Any) -> np.ndarray:
+        raw = np.asarray(obs, dtype=np.float64).ravel()
+        if self.stats is None:
+            return np.asarray(obs, dtype=np.float32)
+        self.stats.update(raw)
+        return self.stats.normalize(raw)
+
+    def play(self, weights: Any) -> tuple[list[float], list[int]]:
+        """The candidate's returns and lengths over ``episodes`` episodes."""
+        self.predictor.load_from_vector(weights)
+        returns: list[float] = []
+        lengths: list[int] = []
+        obs = self.reset()
+        while len(returns) < self.episodes:
+            action, _ = self.predictor.predict(obs)
+            raw, _, terminated, truncated, info = self.env.step(action)
+            if terminated or truncated:
+                returns.append(float(info["episode"]["r"]))
+                lengths.append(int(info["episode"]["l"]))
+                raw, _ = self.env.reset()  # as DummyVecEnv does at an episode's end
+            obs = self._seen(raw)
+        return returns, lengths
+
+    def rms(self) -> RunningMeanStd | None:
+        if self.stats is None:
+            return None
+        rms = RunningMeanStd(shape=self.stats.mean.shape)
+        rms.mean, rms.var = self.stats.mean.copy(), self.stats.var.copy()
+        rms.count = self.stats.count
+        return rms
+
+    def sync(self, rms: RunningMeanStd) -> None:
+        if self.stats is not None:
+            self.stats = ObsStats(rms.mean.copy(), rms.var.copy(), float(rms.count), 10.0, 1e-8)
+
+
+def _lean_worker(remote: Any, parent: Any, payload: CloudpickleWrapper) -> None:
+    """``AsyncEval``'s worker protocol (eval, seed, set_options, get/sync_obs_rms, close)."""
+    parent.close()
+    spec, policy, episodes = payload.var
+    worker = _Candidates(spec, policy, episodes)
+    while True:
+        try:
+            cmd, data = remote.recv()
+        except (EOFError, KeyboardInterrupt):
+            break
+        if cmd == "eval":
+            remote.send([(index, worker.play(weights.cpu())) for index, weights in data])
+        elif cmd == "seed":
+            worker.next_seed = data
+            remote.send([data])
+        elif cmd == "set_options":
+            worker.options = data
+            remote.send(None)
+        elif cmd == "get_obs_rms":
+            remote.send(worker.rms())
+        elif cmd == "sync_obs_rms":
+            worker.sync(data)
+        elif cmd == "close":
+            worker.env.close()
+            remote.close()
+            break
+        else:
+            raise NotImplementedError(f"{cmd!r} is not a LeanAsyncEval worker command")
