@@ -29,8 +29,8 @@ CONFIG = Path(__file__).resolve().parent.parent / "configs" / "bottleneck.yaml"
 def write_files(inflow: float, out: Path, overrides: tuple[str, ...]) -> tuple[Path, Path, Any]:
     """The ``.net.xml`` and ``.rou.xml`` flowrun builds for ``configs/bottleneck.yaml`` at
     ``inflow`` veh/h, and the config's vehicle groups (their speed and lane-change modes)."""
-    from flowrun.config.loader import load_config
     from flowrun.envs.factory import make_env
+    from flowrun.loading.loader import load_config
     from flowrun.networks.build import build_network
     from flowrun.networks.routes import routes_xml
 

@@ -15,8 +15,8 @@ import argparse
 import statistics
 from pathlib import Path
 
-from flowrun.config.loader import load_config, override_config
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config, override_config
 
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "bottleneck.yaml"
 

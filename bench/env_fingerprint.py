@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "ring_wave.yaml"
 

@@ -29,9 +29,9 @@ from typing import Any
 
 import numpy as np
 
-from flowrun.config.loader import load_config
 from flowrun.envs.base import Env
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs" / "benchmarks"
 #: the SUMO domains whose writes shape the traffic, and the prefixes of their write calls

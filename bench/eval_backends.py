@@ -17,8 +17,8 @@ import time
 from dataclasses import replace
 from typing import Any
 
-from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 from flowrun.training.algorithms import algorithm_class
 from flowrun.training.numpy_eval import NumpyEpisodeRunner
 from flowrun.training.periodic_eval import EpisodeRunner, numpy_policy

@@ -16,8 +16,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "minicity.yaml"
 

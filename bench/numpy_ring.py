@@ -37,9 +37,9 @@ import torch
 from sb3_contrib import TRPO
 from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
-from flowrun.config.loader import load_config
 from flowrun.fastring.plan import ring_plan
 from flowrun.fastring.vec_env import RingVecEnv
+from flowrun.loading.loader import load_config
 
 
 def rate(step: object, rings: int, steps: int) -> str:

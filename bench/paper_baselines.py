@@ -99,9 +99,9 @@ def junction_run(seed: int) -> float:
     import numpy as np
 
     import flowrun.kernel.state as state
-    from flowrun.config.loader import load_config
     from flowrun.envs.factory import make_env
     from flowrun.experiment.benchmark import BENCHMARKS
+    from flowrun.loading.loader import load_config
 
     def command_all(self: object, acc: Any, idx: Any) -> Any:
         return acc

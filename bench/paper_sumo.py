@@ -57,9 +57,9 @@ def write_files(name: str, setup: str, out: Path, sets: tuple[str, ...],
     """flowrun's files of benchmark ``name``'s baseline (``setup``: flowrun or paper), the
     network by ``netconvert`` (default: the wheel's)."""
     import flowrun.networks.build as build
-    from flowrun.config.loader import load_config
     from flowrun.envs.factory import make_env
     from flowrun.experiment.benchmark import BENCHMARKS
+    from flowrun.loading.loader import load_config
     from flowrun.networks.routes import routes_xml
 
     if netconvert:

@@ -18,8 +18,8 @@ import statistics
 import time
 from pathlib import Path
 
-from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 DEFAULT = ("sugiyama", "merge", "figure_eight", "grid0", "bottleneck", "minicity")

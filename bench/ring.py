@@ -26,12 +26,12 @@ from typing import Any
 
 import numpy as np
 
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.envs.base import Env
 from flowrun.envs.factory import make_env
 from flowrun.experiment import Experiment
 from flowrun.experiment.baseline import open_run_log
+from flowrun.loading.loader import load_config
 from flowrun.recording.writer import McapRecorder
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"

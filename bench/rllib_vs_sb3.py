@@ -21,8 +21,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig
+from flowrun.loading.loader import load_config
 
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "rllib_ring.yaml"
 MINIBATCH, EPOCHS, LR, GAMMA = 600, 10, 5e-4, 0.999

@@ -26,9 +26,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
 from flowrun.experiment.runner import Experiment
+from flowrun.loading.loader import load_config
 from flowrun.recording.writer import McapRecorder
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

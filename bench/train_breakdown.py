@@ -71,7 +71,7 @@ def main() -> None:
     if args.run is not None:
         print_breakdown(args.run)
         return
-    from flowrun.config.loader import load_config
+    from flowrun.loading.loader import load_config
     from flowrun.training.trainer import train
 
     cfg = load_config(args.config, [*args.sets, f"sim.seed={args.seed}",

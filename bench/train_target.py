@@ -23,9 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from flowrun.config.loader import load_config
 from flowrun.config.params import is_rl
 from flowrun.controllers.car_following_formulas import idm_accel
+from flowrun.loading.loader import load_config
 
 FLOWRUN = str(Path(sys.executable).with_name("flowrun"))
 LENGTHS = (230, 260)

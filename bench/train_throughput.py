@@ -24,9 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 from flowrun.training.trainer import train
 
 BENCHMARKS = tuple(

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 

@@ -12,7 +12,7 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
+from flowrun.loading.loader import load_config
 from flowrun.recording.reader import open_log
 from flowrun.replay.summary import summarize
 

@@ -12,7 +12,6 @@ import typer
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.params import is_rl
 from flowrun.envs.factory import make_env
@@ -20,6 +19,7 @@ from flowrun.errors import ConfigError
 from flowrun.experiment.benchmark import BENCHMARKS, default_config_dir, metric_value, select
 from flowrun.experiment.benchmark_report import mean_std, notes, write_results
 from flowrun.experiment.benchmark_run import BenchmarkPlan, collect
+from flowrun.loading.loader import load_config
 
 ROOT = Path(__file__).resolve().parent.parent
 BENCH_CONFIGS = ROOT / "configs" / "benchmarks"

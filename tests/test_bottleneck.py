@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from flowrun.config.loader import load_config, override_config
 from flowrun.config.params import InitialConfig, NetParams, VehicleParams
 from flowrun.config.vtype import vtype_attributes
 from flowrun.envs import (
@@ -24,6 +23,7 @@ from flowrun.envs import (
 )
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import load_config, override_config
 from flowrun.networks import BottleneckNetwork
 from flowrun.networks.bottleneck import bottleneck_edge_starts, zipper_link
 from flowrun.networks.build import build_network

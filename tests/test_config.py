@@ -15,10 +15,9 @@ from flowrun.config import (
     TrainConfig,
     VehicleParams,
     VehicleType,
-    config_from_dict,
-    load_config,
 )
 from flowrun.errors import ConfigError
+from flowrun.loading import config_from_dict, load_config
 
 SUGIYAMA = """\
 name: sugiyama

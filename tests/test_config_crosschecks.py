@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from flowrun.config import load_config
 from flowrun.errors import ConfigError
+from flowrun.loading import load_config
 
 
 def load_error(tmp_path: Path, text: str) -> tuple[ConfigError, str]:

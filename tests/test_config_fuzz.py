@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flowrun.config.preflight import validate_config
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError
+from flowrun.loading.preflight import validate_config
 from tests.config_mutants import (
     SHIPPED,
     Mutant,

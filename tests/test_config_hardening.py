@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flowrun.config import load_config
-from flowrun.config.preflight import validate_config
 from flowrun.config.yamlio import load_scalar
 from flowrun.errors import ConfigError
+from flowrun.loading import load_config
+from flowrun.loading.preflight import validate_config
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 SUGIYAMA = CONFIGS / "sugiyama.yaml"

@@ -7,9 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from flowrun.config import ControllerSpec, load_config
+from flowrun.config import ControllerSpec
 from flowrun.config.overrides import parse_key
 from flowrun.errors import ConfigError
+from flowrun.loading import load_config
 
 BASE = """\
 name: base

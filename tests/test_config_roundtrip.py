@@ -20,12 +20,11 @@ from flowrun.config import (
     SumoParams,
     TrainConfig,
     VehicleParams,
-    config_from_dict,
     config_to_dict,
     dump_config,
-    load_config,
 )
 from flowrun.controllers import ContinuousRouter, IDMController, RLController
+from flowrun.loading import config_from_dict, load_config
 
 
 def flow_style_config() -> ExperimentConfig:

@@ -16,12 +16,12 @@ from gymnasium.utils.env_checker import check_env
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.envs.factory import env_class, make_env
 from flowrun.envs.registry import resolve_env_class
 from flowrun.errors import ConfigError
 from flowrun.experiment.baseline import run_baseline
 from flowrun.kernel.sumo import SumoProcess
+from flowrun.loading.loader import load_config
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"

@@ -19,7 +19,6 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.envs import AccelEnv, Env, MergePOEnv
 from flowrun.envs.defaults import merge0_config
@@ -27,6 +26,7 @@ from flowrun.envs.factory import make_env
 from flowrun.envs.merge import merge_reward, time_headway_penalty
 from flowrun.envs.rewards import desired_velocity
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import load_config
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 UPSTREAM = ("inflow_highway", "left")

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from flowrun.config.dump import dump_config
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig, NetworkConfig
 from flowrun.controllers import ContinuousRouter, IDMController, RLController
 from flowrun.core.params import (
@@ -22,6 +21,7 @@ from flowrun.core.params import (
 )
 from flowrun.envs import WaveAttenuationPOEnv
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 from flowrun.scenarios.loop import ADDITIONAL_NET_PARAMS, LoopScenario
 
 RING_WAVE = Path(__file__).resolve().parent.parent / "configs" / "ring_wave.yaml"

@@ -14,9 +14,9 @@ from typer.testing import CliRunner
 
 import flowrun.envs  # noqa: F401 - registers flowrun/<Name>-v0
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
 from flowrun.envs.render import kernel_road, render_kernel, snapshot
+from flowrun.loading.loader import load_config
 from flowrun.render import Painter, road_from_net_xml, speed_colours, speed_top
 from flowrun.render.colours import AV_COLOUR, SIGNAL_COLOURS
 from flowrun.render.picture import ROAD_COLOUR

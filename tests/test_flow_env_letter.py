@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flowrun.config.loader import load_config
 from flowrun.config.params import EnvParams, NetParams, SumoParams, VehicleParams
 from flowrun.envs import BottleneckAccelEnv
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 from flowrun.networks import BottleneckNetwork
 
 pytestmark = pytest.mark.sumo

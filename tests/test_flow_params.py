@@ -16,9 +16,6 @@ import yaml
 from typer.testing import CliRunner
 
 from flowrun.cli.commands_run import register
-from flowrun.config import load_config
-from flowrun.config.flow_module import load_flow_module
-from flowrun.config.flow_params import config_from_flow_params, from_flow_params
 from flowrun.config.params import ControllerSpec
 from flowrun.controllers import ContinuousRouter, IDMController
 from flowrun.core.experiment import Experiment
@@ -26,6 +23,9 @@ from flowrun.core.params import EnvParams, InitialConfig, NetParams, SumoParams,
 from flowrun.envs import Env
 from flowrun.envs.ring.accel import ADDITIONAL_ENV_PARAMS, AccelEnv
 from flowrun.errors import ConfigError
+from flowrun.loading import load_config
+from flowrun.loading.flow_module import load_flow_module
+from flowrun.loading.flow_params import config_from_flow_params, from_flow_params
 from flowrun.networks.ring import ADDITIONAL_NET_PARAMS, RingNetwork
 from flowrun.utils.registry import env_constructor, make_create_env
 

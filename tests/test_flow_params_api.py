@@ -16,8 +16,6 @@ import typer
 import yaml
 from typer.testing import CliRunner
 
-from flowrun.config.flow_params import from_flow_params
-from flowrun.config.loader import load_config
 from flowrun.config.validate import check_params
 from flowrun.controllers import ContinuousRouter, IDMController, RLController
 from flowrun.core.params import (
@@ -30,6 +28,8 @@ from flowrun.core.params import (
     VehicleParams,
 )
 from flowrun.errors import ConfigError
+from flowrun.loading.flow_params import from_flow_params
+from flowrun.loading.loader import load_config
 from flowrun.networks.ring import RingNetwork
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "flow_configs"

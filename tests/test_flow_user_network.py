@@ -18,11 +18,11 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.flow_module import load_flow_module
-from flowrun.config.loader import load_config
 from flowrun.core.experiment import Experiment
 from flowrun.envs.factory import make_env, make_network
 from flowrun.errors import ConfigError
+from flowrun.loading.flow_module import load_flow_module
+from flowrun.loading.loader import load_config
 from flowrun.networks.registry import network_class
 from flowrun.utils.registry import make_create_env
 

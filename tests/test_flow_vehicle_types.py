@@ -14,9 +14,9 @@ from typing import Any
 
 import pytest
 
-from flowrun.config.loader import load_config
 from flowrun.config.vtype import vtype_attributes
 from flowrun.envs.defaults import grid_config, merge0_config
+from flowrun.loading.loader import load_config
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from flowrun.config.loader import load_config
 from flowrun.config.params import EnvParams, NetParams, SumoParams, VehicleParams
 from flowrun.envs.factory import make_env
 from flowrun.envs.signals import SwitchTimers, discrete_mask, edge_number, phase_state
@@ -23,6 +22,7 @@ from flowrun.envs.traffic_light_grid import (
     TrafficLightGridPOEnv,
 )
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import load_config
 from flowrun.networks.registry import network_class
 from flowrun.networks.traffic_light_grid import TrafficLightGridNetwork
 

@@ -54,7 +54,7 @@ def children(pid: int) -> list[tuple[int, str]]:
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_ctrl_c_that_kills_netconvert_leaves_an_interrupted_evaluation(tmp_path: Path) -> None:
-    from flowrun.config.loader import load_config
+    from flowrun.loading.loader import load_config
     from flowrun.training.trainer import train
 
     run = train(load_config(CONFIG, TINY), out=tmp_path / "runs", argv=["test"]).run_dir

@@ -12,8 +12,8 @@ from typing import Any
 
 import pytest
 
-from flowrun.config.loader import load_config
 from flowrun.errors import SimulationError
+from flowrun.loading.loader import load_config
 from flowrun.rundir.folders import read_status
 from flowrun.rundir.train_state import StopRequest
 

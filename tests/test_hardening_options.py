@@ -15,7 +15,7 @@ from typer.testing import CliRunner, Result
 
 from flowrun.cli.common import NO_SEED_OR_SET, OUT_HELP
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
+from flowrun.loading.loader import load_config
 from flowrun.recording import McapRecorder
 from flowrun.recording.synthetic import ring_frames
 from tests.test_flow_params import RING_MODULE, write_module

@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flowrun.config.loader import load_config
 from flowrun.config.params import InitialConfig, NetParams, VehicleParams
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import load_config
 from flowrun.networks import HighwayRampsNetwork
 from flowrun.networks.build import build_network
 from flowrun.networks.highway_ramps import ramp_routes

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from flowrun.config.loader import load_config
 from flowrun.config.params import InFlows, NetParams, VehicleParams
 from flowrun.envs.factory import make_env, make_network
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import load_config
 from flowrun.networks.highway_ramps import ADDITIONAL_NET_PARAMS, HighwayRampsNetwork
 from flowrun.networks.routes import named_routes, routes_xml
 

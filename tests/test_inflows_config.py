@@ -14,12 +14,11 @@ from flowrun.config import (
     NetParams,
     NetworkConfig,
     VehicleParams,
-    config_from_dict,
     dump_config,
-    load_config,
 )
 from flowrun.config.inflows import InFlow, InFlows
 from flowrun.errors import ConfigError
+from flowrun.loading import config_from_dict, load_config
 
 
 def one(**kwargs: object) -> InFlow:

@@ -12,8 +12,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 

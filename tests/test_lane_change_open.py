@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from flowrun.config.loader import load_config
 from flowrun.envs import LaneChangeAccelEnv
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import load_config
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 

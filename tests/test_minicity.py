@@ -16,7 +16,6 @@ from typing import Any
 import numpy as np
 import pytest
 
-from flowrun.config.loader import load_config
 from flowrun.config.params import (
     ControllerSpec,
     EnvParams,
@@ -38,6 +37,7 @@ from flowrun.controllers.minicity_router import (
 from flowrun.envs.factory import make_env
 from flowrun.envs.ring.accel import ADDITIONAL_ENV_PARAMS, AccelEnv
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import load_config
 from flowrun.networks import MiniCityNetwork
 from flowrun.networks.minicity import minicity_spec
 from flowrun.networks.registry import network_class

@@ -17,9 +17,9 @@ pytest.importorskip("pettingzoo")
 
 from pettingzoo.test import parallel_api_test
 
-from flowrun.config.loader import load_config
 from flowrun.envs.factory import make_env
 from flowrun.envs.rewards import desired_velocity
+from flowrun.loading.loader import load_config
 
 pytestmark = pytest.mark.sumo
 

@@ -16,10 +16,10 @@ pytest.importorskip("pettingzoo")
 
 from pettingzoo.test import parallel_api_test
 
-from flowrun.config.loader import load_config
 from flowrun.core import rewards
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import load_config
 from flowrun.multiagent.grid import neighbour_index
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"

@@ -11,8 +11,8 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import load_config
 from flowrun.training.numpy_eval import NumpyEpisodeRunner, numpy_eval_plan
 from flowrun.training.periodic_eval import EpisodeRunner
 

@@ -14,8 +14,8 @@ from mcap.reader import make_reader
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.experiment.baseline import run_baseline
+from flowrun.loading.loader import load_config
 from flowrun.recording import open_log
 from flowrun.recording.scene import SCENE_TOPIC, SCENE_TYPE
 from flowrun.render import speed_colours, speed_top

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flowrun.config.loader import load_config
 from flowrun.core.params import SumoParams
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import load_config
 from flowrun.utils.registry import env_constructor
 from tests.test_flow_params import ring_params
 

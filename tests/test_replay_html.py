@@ -16,8 +16,8 @@ from PIL import Image
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.experiment.baseline import run_baseline
+from flowrun.loading.loader import load_config
 from flowrun.recording import McapRecorder, open_log
 from flowrun.render import ring_road, speed_colours
 from flowrun.replay import html as html_mod

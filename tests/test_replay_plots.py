@@ -12,10 +12,10 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 from flowrun.cli.replay_outputs import PlotKind, draw_plots
-from flowrun.config.loader import load_config
 from flowrun.experiment.baseline import run_baseline
 from flowrun.experiment.benchmark_report import plot_results, plot_title
 from flowrun.experiment.benchmark_run import BenchmarkPlan
+from flowrun.loading.loader import load_config
 from flowrun.recording import McapRecorder, open_log
 from flowrun.recording.synthetic import ring_frames
 from flowrun.replay import layout_for, plot_speeds, speed_series

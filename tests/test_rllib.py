@@ -20,8 +20,8 @@ pytest.importorskip("pettingzoo", reason="needs the multiagent extra")
 
 import ray
 
-from flowrun.config.loader import load_config
 from flowrun.errors import ConfigError, TrainingError
+from flowrun.loading.loader import load_config
 from flowrun.recording.reader import open_log
 from flowrun.training.rllib import (
     INSTALL_HINT,

@@ -24,7 +24,7 @@ from ray.rllib.env.multi_agent_episode import MultiAgentEpisode
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
+from flowrun.loading.loader import load_config
 from flowrun.recording.reader import open_log
 from flowrun.training.rllib import train_rllib
 from flowrun.training.rllib.envs import create_env, env_config_of

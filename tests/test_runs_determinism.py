@@ -16,10 +16,10 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.config.params import VehicleParams
 from flowrun.errors import ConfigError
 from flowrun.experiment.baseline import run_baseline
+from flowrun.loading.loader import load_config
 from flowrun.recording.reader import open_log
 from flowrun.rundir.folders import is_complete
 

@@ -20,9 +20,9 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.errors import ConfigError, RecordingError
 from flowrun.experiment.baseline import run_baseline
+from flowrun.loading.loader import load_config
 from flowrun.recording.reader import open_log
 from flowrun.rundir.folders import is_complete, read_status
 

@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 from flowrun.cli.common import COMMON_OPTIONS
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
+from flowrun.loading.loader import load_config
 
 ROOT = Path(__file__).resolve().parent.parent
 SUGIYAMA = ROOT / "configs" / "sugiyama.yaml"

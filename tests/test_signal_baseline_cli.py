@@ -12,11 +12,11 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.params import InFlows, NetParams
 from flowrun.experiment.baseline import run_baseline
 from flowrun.experiment.signal_baselines import run_signal_baseline
+from flowrun.loading.loader import load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID0 = ROOT / "configs" / "grid0.yaml"

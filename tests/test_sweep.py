@@ -18,7 +18,6 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.errors import ConfigError
 from flowrun.experiment.sweep import (
     check_metric,
@@ -29,6 +28,7 @@ from flowrun.experiment.sweep import (
     split_values,
 )
 from flowrun.experiment.sweep_report import plot_metric, write_tables
+from flowrun.loading.loader import load_config
 from flowrun.recording.reader import open_log
 from flowrun.rundir.folders import is_complete, read_status
 

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flowrun.config import config_from_dict
 from flowrun.config.params import ControllerSpec, EnvParams, NetParams, SumoParams, VehicleParams
 from flowrun.errors import ConfigError
+from flowrun.loading import config_from_dict
 from flowrun.networks.base import Network, TemplateVehicle
 from flowrun.networks.build import build_network
 from tests.test_open_kernel import Drive, ToyMerge

@@ -8,11 +8,11 @@ from pathlib import Path
 import pytest
 
 from flowrun.config.dump import config_to_dict, dump_config
-from flowrun.config.flow_params import from_flow_params
-from flowrun.config.loader import config_from_dict, load_config
 from flowrun.config.params import TrafficLightParams
 from flowrun.envs.factory import make_network
 from flowrun.errors import ConfigError
+from flowrun.loading.flow_params import from_flow_params
+from flowrun.loading.loader import config_from_dict, load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID0 = (ROOT / "configs" / "grid0.yaml").read_text()
@@ -153,7 +153,7 @@ def test_bad_controllers_are_errors(config: str, sets: list[str], words: str) ->
 
 
 def test_flow_params_tls_becomes_the_section() -> None:
-    from flowrun.config.flow_params import FLOW_KEYS  # noqa: F401  (module importable)
+    from flowrun.loading.flow_params import FLOW_KEYS  # noqa: F401  (module importable)
 
     cfg = load_config(ROOT / "configs" / "grid0.yaml")
     tls = TrafficLightParams()

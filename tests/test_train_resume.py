@@ -11,7 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
+from flowrun.loading.loader import load_config
 from flowrun.rundir.train_state import RunLock, run_state
 from flowrun.training.periodic_eval import EVAL_LOG, EVALUATIONS, EvalHistory, numpy_policy
 

@@ -155,7 +155,7 @@ def test_sigkill_leaves_a_cut_run_that_resumes_and_eval_names_it(tmp_path: Path)
 @pytest.fixture(scope="module")
 def trained_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A finished tiny training run (in this process)."""
-    from flowrun.config.loader import load_config
+    from flowrun.loading.loader import load_config
     from flowrun.training.trainer import train
 
     cfg = load_config(CONFIG, [*TINY[:-1], "train.total_timesteps=512", "sim.seed=4"])

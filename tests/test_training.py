@@ -10,9 +10,9 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
-from flowrun.config.loader import load_config
 from flowrun.config.params import is_rl
 from flowrun.errors import ConfigError, TrainingError
+from flowrun.loading.loader import load_config
 from flowrun.training import deps
 from flowrun.training.evaluate import all_human
 from flowrun.training.schedules import LinearSchedule, parse_schedule

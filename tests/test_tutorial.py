@@ -178,7 +178,7 @@ from pathlib import Path
 import libsumo
 import pytest
 
-from flowrun.config.loader import load_config
+from flowrun.loading.loader import load_config
 from flowrun.experiment.baseline import run_baseline
 from flowrun.recording.reader import open_log
 

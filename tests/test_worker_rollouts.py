@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from flowrun.config.loader import load_config
+from flowrun.loading.loader import load_config
 from flowrun.training.rollout import ObsStats
 from flowrun.training.vecenv import make_vec_env, wrap_normalize
 from flowrun.training.worker_rollouts import numpy_actor, with_worker_rollouts

@@ -66,8 +66,8 @@ def _check_configs(plan: BenchmarkPlan) -> None:
     Raises:
         ConfigError: a missing or invalid config, or a --set it refuses (naming the benchmark).
     """
-    from flowrun.config.loader import load_config
     from flowrun.experiment.baseline import resolve_steps
+    from flowrun.loading.loader import load_config
 
     for bench in plan.benchmarks:
         path = bench.config_path(plan.configs)
@@ -82,8 +82,8 @@ def _check_configs(plan: BenchmarkPlan) -> None:
 
 def _first_seed(bench: Benchmark, configs: Path | None, sets: tuple[str, ...]) -> int:
     """The first seed without --seed: ``sim.seed`` of the config (a --set of it counts)."""
-    from flowrun.config.loader import load_config
     from flowrun.experiment.benchmark import default_config_dir
+    from flowrun.loading.loader import load_config
 
     path = bench.config_path(configs if configs is not None else default_config_dir())
     if not path.is_file():

@@ -26,8 +26,8 @@ def convert_text(config: Path, overrides: Sequence[str] = ()) -> str:
             or an override is invalid.
     """
     from flowrun.config.dump import dump_config
-    from flowrun.config.flow_module import is_flow_module, load_flow_module
-    from flowrun.config.loader import override_config
+    from flowrun.loading.flow_module import is_flow_module, load_flow_module
+    from flowrun.loading.loader import override_config
 
     if not is_flow_module(config):
         raise ConfigError(

@@ -67,8 +67,8 @@ def point_command(
 
 def _check_points(config: Path, sets: list[str], plan: SweepPlan, steps: int | None) -> None:
     """Load every grid point's config (and its step count) before anything runs."""
-    from flowrun.config.flow_module import load_any_config
     from flowrun.experiment.baseline import resolve_steps
+    from flowrun.loading.flow_module import load_any_config
 
     seen: set[tuple[tuple[str, str], ...]] = set()
     for point in plan.points:
@@ -210,8 +210,8 @@ def prepare_sweep(request: SweepRequest) -> tuple[SweepPlan, str, list[str]]:
             not load (with its values).
         FlowrunError: an unusable --out, a backend that cannot run.
     """
-    from flowrun.config.flow_module import load_any_config
     from flowrun.experiment import sweep as sw
+    from flowrun.loading.flow_module import load_any_config
     from flowrun.rundir.folders import check_out_dir
 
     r = request

@@ -1,5 +1,8 @@
 """Typed, validated experiment configuration (the YAML file and Flow's parameter objects).
 
+Reading a file into a checked :class:`ExperimentConfig` (which builds its network to check
+it) is one layer up, in :mod:`flowrun.loading`.
+
 Also Flow's ``flow.config`` settings that still mean something: :data:`PROJECT_PATH` (the
 folder holding the package) and :data:`LOG_DIR` (``PROJECT_PATH/data``).
 """
@@ -43,9 +46,8 @@ __all__ = [
 ]
 
 from flowrun.config.dump import config_to_dict, dump_config
-from flowrun.config.loader import config_from_dict, load_config
 
-__all__ += ["config_from_dict", "config_to_dict", "dump_config", "load_config"]
+__all__ += ["config_to_dict", "dump_config"]
 
 #: the folder that holds the ``flowrun`` package (Flow's ``flow.config.PROJECT_PATH``)
 PROJECT_PATH = str(_Path(__file__).resolve().parents[2])

@@ -1,4 +1,4 @@
-"""``ExperimentConfig`` -> plain data -> YAML: the inverse of :mod:`flowrun.config.loader`.
+"""``ExperimentConfig`` -> plain data -> YAML: the inverse of :mod:`flowrun.loading.loader`.
 
 Every field is written (the resolved config), under its YAML key, so a dumped file states the
 whole experiment and loads back to an equal config. YAML has no tuples: a tuple inside a free

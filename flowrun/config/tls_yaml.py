@@ -11,7 +11,7 @@ traffic_lights:
        phases: [{duration: 31, state: GrGr}, {duration: 3, state: yryr}, ...]}
 ```
 Phases take Flow's keys (``duration, state, minDur, maxDur``). A state's length is checked
-against the junction once the network is built (:mod:`flowrun.config.loader`).
+against the junction once the network is built (:mod:`flowrun.loading.loader`).
 """
 
 from __future__ import annotations

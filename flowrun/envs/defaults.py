@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig, NetworkConfig
 from flowrun.config.params import InFlows, NetParams, VehicleParams
 from flowrun.envs.factory import CONFIGS_DIR
+from flowrun.loading.loader import load_config
 
 #: Flow's grid benchmarks: inflow per entry edge (veh/h), entry speed (m/s) (``grid0.yaml``).
 EDGE_INFLOW, V_ENTER = 300, 30

@@ -7,7 +7,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from flowrun.config.loader import load_config, override_config
 from flowrun.config.model import ExperimentConfig, NetworkConfig
 from flowrun.config.params import (
     ControllerSpec,
@@ -22,6 +21,7 @@ from flowrun.config.signal_control import network_programs
 from flowrun.envs.base import Env, check_additional_params
 from flowrun.envs.registry import resolve_env_class
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import load_config, override_config
 from flowrun.networks.base import Network
 from flowrun.networks.registry import network_class
 

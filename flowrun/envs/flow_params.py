@@ -3,7 +3,7 @@
 ``make_create_env(flow_params)`` returns ``(create_env, env_name)`` as in Flow: ``create_env()``
 builds a fresh environment, and ``env_name`` (``<EnvClass>-v<version>``, the first version not
 yet taken) is registered with Gymnasium, so ``gymnasium.make(env_name)`` works too. Both go
-through :func:`flowrun.config.flow_params.from_flow_params`: the env runs exactly the
+through :func:`flowrun.loading.flow_params.from_flow_params`: the env runs exactly the
 :class:`~flowrun.config.model.ExperimentConfig` that ``flowrun convert`` would print.
 """
 
@@ -17,9 +17,9 @@ from typing import Any
 
 import gymnasium
 
-from flowrun.config.flow_params import FlowExperiment, from_flow_params
 from flowrun.envs.base import Env
 from flowrun.envs.factory import env_class, make_network
+from flowrun.loading.flow_params import FlowExperiment, from_flow_params
 from flowrun.networks.base import Network
 
 

@@ -30,7 +30,6 @@ from typing import Any
 import numpy as np
 
 from flowrun.config.dump import config_to_dict
-from flowrun.config.loader import load_config
 from flowrun.experiment.benchmark import Benchmark, metric_value
 from flowrun.experiment.benchmark_results import (
     eval_seeds,
@@ -39,6 +38,7 @@ from flowrun.experiment.benchmark_results import (
     policy_values,
     result_name,
 )
+from flowrun.loading.loader import load_config
 from flowrun.rundir.folders import is_complete, read_status
 from flowrun.rundir.safeio import write_json
 

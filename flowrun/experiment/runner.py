@@ -93,8 +93,8 @@ class Experiment:
             sink_factory, custom_callables = None, sink_factory
         self.config: ExperimentConfig | None = None
         if isinstance(env, Mapping):
-            from flowrun.config.flow_params import from_flow_params
             from flowrun.envs.flow_params import make_flow_env
+            from flowrun.loading.flow_params import from_flow_params
 
             flow = from_flow_params(env)
             self.config = flow.config

@@ -18,8 +18,6 @@ from typing import Any
 import numpy as np
 
 from flowrun.config.dump import config_to_dict, dump_config
-from flowrun.config.experiment_checks import sub_path
-from flowrun.config.loader import config_from_dict, load_config, read_config_text
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.overrides import apply_overrides
 from flowrun.config.yamlio import parse_yaml
@@ -28,6 +26,8 @@ from flowrun.errors import ConfigError, TrainingError
 from flowrun.experiment.baseline import open_run_log
 from flowrun.experiment.metrics import RunMetrics
 from flowrun.experiment.runner import Experiment, FrameSink
+from flowrun.loading.experiment_checks import sub_path
+from flowrun.loading.loader import config_from_dict, load_config, read_config_text
 from flowrun.rundir.folders import (
     check_sumo_path,
     exit_code_of,

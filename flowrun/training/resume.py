@@ -17,9 +17,9 @@ from pathlib import Path
 from typing import Any
 
 from flowrun.config.dump import dump_config
-from flowrun.config.loader import load_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import TrainingError
+from flowrun.loading.loader import load_config
 from flowrun.training.callbacks import read_checkpoint_state
 
 MONITOR = "monitor"

@@ -18,10 +18,10 @@ from gymnasium.spaces import Box
 from ray.rllib.env.multi_agent_env import MultiAgentEnv
 
 from flowrun.config.dump import config_to_dict
-from flowrun.config.loader import config_from_dict
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.vehicles import is_rl
 from flowrun.envs.factory import make_env
+from flowrun.loading.loader import config_from_dict
 from flowrun.training.rllib.options import EPISODE_AGENT
 
 #: The name flowrun's env creator is registered under with Ray Tune's registry.

@@ -19,13 +19,13 @@ import os
 from collections.abc import Sequence
 from typing import Any
 
-from flowrun.config.experiment_checks import check_env_params, optional, sub_path
-from flowrun.config.flow_module import is_flow_module, load_any_config
-from flowrun.config.loader import load_config_located
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.params import is_rl
 from flowrun.config.yamlio import Locations
 from flowrun.errors import ConfigError, TrainingError
+from flowrun.loading.experiment_checks import check_env_params, optional, sub_path
+from flowrun.loading.flow_module import is_flow_module, load_any_config
+from flowrun.loading.loader import load_config_located
 from flowrun.suggest import did_you_mean
 
 #: Built-in environments whose actions drive RL vehicles (training needs at least one).

@@ -18,10 +18,10 @@ from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
 
-from flowrun.config.flow_params import FlowExperiment, from_flow_params
-from flowrun.config.loader import load_config, override_config
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError
+from flowrun.loading.flow_params import FlowExperiment, from_flow_params
+from flowrun.loading.loader import load_config, override_config
 
 
 def is_flow_module(path: str | os.PathLike[str]) -> bool:

@@ -4,11 +4,11 @@ Checks run in this order and the first problem raises one :class:`ConfigError` c
 key path and ``file:line``: the file itself (a regular UTF-8 text file of at most 1 MiB, not
 empty), YAML syntax, duplicate keys, size and nesting, then each section's keys, types and
 values, then what spans sections (unique vehicle group ids, controller names and parameters,
-inflow vehicle types, network-specific limits, and :mod:`flowrun.config.experiment_checks`:
+inflow vehicle types, network-specific limits, and :mod:`flowrun.loading.experiment_checks`:
 step length, the seeded initial placement, departure speeds, training values). Settings that
 would have no effect are logged as warnings. The environment class is resolved when the
-environment is made (config sits below ``flowrun.envs`` and does not import it);
-:mod:`flowrun.config.preflight` (``flowrun validate``) resolves it too.
+environment is made (loading sits below ``flowrun.envs`` and does not import it);
+:mod:`flowrun.loading.preflight` (``flowrun validate``) resolves it too.
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ from pathlib import Path
 from typing import Any
 
 from flowrun.config.convert import Converter
-from flowrun.config.experiment_checks import check_experiment, ignored_settings, optional, sub_path
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.overrides import apply_overrides
 from flowrun.config.params import VehicleType
@@ -31,6 +30,10 @@ from flowrun.config.yamlio import KeyPath, Locations, format_path, parse_yaml
 from flowrun.controllers.registry import ControllerKind, build_controller, resolve_controller
 from flowrun.errors import ConfigError, FlowrunError
 from flowrun.import_path import import_near
+from flowrun.loading.experiment_checks import check_experiment, ignored_settings, sub_path
+from flowrun.networks.registry import network_class, validate_network
+from flowrun.networks.routes import check_inflow_route
+from flowrun.networks.tls import check_programs
 from flowrun.suggest import did_you_mean
 
 # Controller fields of a vehicle group and the controller kind each one takes.
@@ -265,15 +268,14 @@ def _check_inflows(
 
 def _check_inflow_routes(cfg: ExperimentConfig, network: Any, loc: Locations) -> None:
     """An inflow's ``route`` names one of the network's routes, starting on its edge."""
-    check = optional("flowrun.networks.routes", "check_inflow_route")
     inflows = cfg.network.net_params.inflows
-    if check is None or inflows is None:
+    if inflows is None:
         return
     for j, flow in enumerate(inflows.get()):
         if flow.route is None:
             continue
         try:
-            check(network.spec, flow.route, flow.edge)
+            check_inflow_route(network.spec, flow.route, flow.edge)
         except ConfigError as err:
             raise loc.error(err.message, ("network", "inflows", j, "route")) from None
 
@@ -281,14 +283,11 @@ def _check_inflow_routes(cfg: ExperimentConfig, network: Any, loc: Locations) ->
 def _build_network(cfg: ExperimentConfig, loc: Locations) -> Any:
     """Build the config's network (its road, not SUMO's files).
 
-    ``None`` while ``flowrun.networks`` is not importable. A network that cannot be built (a
-    missing template file, a route over unconnected edges, ...) is reported at its key.
+    A network that cannot be built (a missing template file, a route over unconnected
+    edges, ...) is reported at its key.
     """
-    find = optional("flowrun.networks.registry", "network_class")
-    if find is None:
-        return None
     try:
-        cls = find(cfg.network.type, _search_dir(loc))
+        cls = network_class(cfg.network.type, _search_dir(loc))
         tls = cfg.traffic_lights.programs  # a network may make the nodes with lights ones
         network = cls(cfg.name, cfg.vehicles, cfg.network.net_params, cfg.initial, tls)
     except ConfigError as err:
@@ -313,11 +312,10 @@ def _check_traffic_lights(cfg: ExperimentConfig, network: Any, loc: Locations) -
             (*at, "controller"),
         )
     params = tls.programs
-    check = optional("flowrun.networks.tls", "check_programs")
-    if check is None or not (params.get_properties() or params.baseline):
+    if not (params.get_properties() or params.baseline):
         return
     try:
-        check(network, params)
+        check_programs(network, params)
     except ConfigError as err:
         declared = list(params.get_properties())
         node = next((n for n in declared if err.path.startswith(f"traffic_lights.{n}")), None)
@@ -338,12 +336,9 @@ def _search_dir(loc: Locations) -> Path | None:
 
 
 def _check_network(cfg: ExperimentConfig, loc: Locations) -> None:
-    validate = optional("flowrun.networks.registry", "validate_network")
-    if validate is None:
-        return
     params = dict(cfg.network.net_params.additional_params)
     try:
-        validate(cfg.network.type, params, cfg.vehicles, cfg.initial, _search_dir(loc))
+        validate_network(cfg.network.type, params, cfg.vehicles, cfg.initial, _search_dir(loc))
     except ConfigError as err:
         raise loc.error(err.message, ("network", *sub_path(err.path))) from None
 

@@ -21,7 +21,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from flowrun.config.dump import config_to_dict
-from flowrun.config.loader import config_from_dict
 from flowrun.config.model import ExperimentConfig, NetworkConfig
 from flowrun.config.params import (
     EnvParams,
@@ -33,6 +32,7 @@ from flowrun.config.params import (
 )
 from flowrun.config.signal_control import TrafficLightsConfig
 from flowrun.errors import ConfigError
+from flowrun.loading.loader import config_from_dict
 from flowrun.suggest import did_you_mean
 
 #: Keys of Flow's ``flow_params`` (``initial`` and ``tls`` may be left out).
@@ -83,7 +83,7 @@ def _env_name(value: Any, where: str) -> tuple[str, type | None]:
         raise ConfigError(
             f"expected an environment class or its name, got {value!r}", "env_name", where
         )
-    # flowrun's own envs by name (config does not import flowrun.envs); others by import path
+    # flowrun's own envs by name (loading does not import flowrun.envs); others by import path
     own = value.__module__.startswith("flowrun.envs.")
     return (value.__name__ if own else class_path(value)), value
 
