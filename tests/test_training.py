@@ -11,11 +11,11 @@ from typer.testing import CliRunner
 
 from flowrun.cli.main import app
 from flowrun.config.params import is_rl
+from flowrun.config.schedules import LinearSchedule, parse_schedule
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.loading.loader import load_config
 from flowrun.training import deps
 from flowrun.training.evaluate import all_human
-from flowrun.training.schedules import LinearSchedule, parse_schedule
 
 pytestmark = pytest.mark.train
 pytest.importorskip("stable_baselines3")

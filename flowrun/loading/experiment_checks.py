@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from flowrun.config.hyperparams import check_hyperparam_values
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.overrides import parse_key
 from flowrun.config.params import SumoParams
@@ -281,11 +282,8 @@ def _check_train_values(cfg: ExperimentConfig, loc: Locations) -> None:
             )
     if train.backend != "sb3" or not train.hyperparams:
         return
-    check = optional("flowrun.training.algorithms", "check_hyperparam_values")
-    if check is None:
-        return
     try:
-        check(train.algorithm, train.hyperparams, train.n_envs)
+        check_hyperparam_values(train.algorithm, train.hyperparams, train.n_envs)
     except ConfigError as err:
         raise loc.error(err.message, sub_path(err.path)) from None
 

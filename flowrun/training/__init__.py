@@ -4,8 +4,8 @@ Importing this package needs no train extra; torch and stable-baselines3 are imp
 training or evaluation starts (:mod:`flowrun.training.deps`).
 """
 
+from flowrun.config.schedules import LinearSchedule, parse_schedule
 from flowrun.training.evaluate import EvalResult, all_human, evaluate
-from flowrun.training.schedules import LinearSchedule, parse_schedule
 from flowrun.training.trainer import TrainResult, train
 
 __all__ = [
