@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 from flowrun.cli.main import app
 from flowrun.errors import ConfigError
 from flowrun.loading.loader import load_config
-from flowrun.loading.preflight import validate_config
+from flowrun.preflight.checks import validate_config
 from flowrun.suggest import one_edit_apart
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -19,7 +19,7 @@ import pytest
 
 from flowrun.envs.factory import make_env
 from flowrun.errors import ConfigError
-from flowrun.loading.preflight import validate_config
+from flowrun.preflight.checks import validate_config
 from tests.config_mutants import (
     SHIPPED,
     Mutant,

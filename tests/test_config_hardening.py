@@ -14,7 +14,7 @@ import pytest
 from flowrun.config.yamlio import load_scalar
 from flowrun.errors import ConfigError
 from flowrun.loading import load_config
-from flowrun.loading.preflight import validate_config
+from flowrun.preflight.checks import validate_config
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 SUGIYAMA = CONFIGS / "sugiyama.yaml"

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from flowrun.errors import ConfigError, FlowrunError
-from flowrun.training.prepare import prepare_training
+from flowrun.preflight.prepare import prepare_training
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 

@@ -61,7 +61,7 @@ def register(app: typer.Typer) -> None:
         --set sim.step=0.5 --set vehicles[0].count=10.
         """
         from flowrun.config import dump_config
-        from flowrun.loading.preflight import validate_config
+        from flowrun.preflight.checks import validate_config
 
         cfg = validate_config(config, overrides_with_seed(set_, seed))
         typer.echo(dump_config(cfg), nl=False)

@@ -104,7 +104,7 @@ def baseline(
     Ctrl-C or SIGTERM finishes the logs and exits 130 / 143.
     """
     from flowrun.experiment.baseline import resolve_steps
-    from flowrun.loading.preflight import preflight
+    from flowrun.preflight.checks import preflight
 
     cfg, where = load_located(config, overrides_with_seed(set_, seed))
     preflight(replace(cfg, train=None), where)  # env class and its params, at file:line

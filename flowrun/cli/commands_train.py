@@ -94,7 +94,7 @@ def train(
     continues from its last checkpoint, keeping the earlier monitor files, evaluations and
     best model. Ctrl-C or SIGTERM saves a checkpoint and exits with 130 / 143.
     """
-    from flowrun.training.prepare import prepare_training
+    from flowrun.preflight.prepare import prepare_training
 
     overrides = overrides_with_seed(set_, seed)
     if seed is not None:
@@ -252,9 +252,9 @@ def _evaluate_and_show(
 ) -> Path:
     """Roll out the policy and the all-human baseline, print their table; the evaluation
     folder."""
+    from flowrun.preflight.prepare import not_a_training_run
     from flowrun.rundir.train_state import run_state
     from flowrun.training.evaluate import eval_config, evaluate, model_path
-    from flowrun.training.prepare import not_a_training_run
     from flowrun.training.rllib import evaluate_rllib, is_rllib_run
 
     evaluate_run = evaluate_rllib if is_rllib_run(run_dir) else evaluate

@@ -149,7 +149,7 @@ def path_problem(err: OSError) -> str:
 def load_located(config: Path, overrides: list[str]) -> tuple[ExperimentConfig, Locations]:
     """A YAML config or Flow config module with its ``--set`` overrides, and where its keys
     stand, so that the checks a run makes before it starts
-    (:func:`flowrun.loading.preflight.preflight`) name ``file:line`` as ``validate`` does."""
+    (:func:`flowrun.preflight.checks.preflight`) name ``file:line`` as ``validate`` does."""
     from flowrun.config.yamlio import Locations
     from flowrun.loading.flow_module import is_flow_module, load_any_config
     from flowrun.loading.loader import load_config_located

@@ -2,7 +2,7 @@
 
 :mod:`flowrun.config` holds the vocabulary (parameter types, YAML reading); loading sits
 above :mod:`flowrun.networks` because its checks build the config's network (edges, routes,
-traffic-light programs, the initial placement). :mod:`~flowrun.loading.preflight` holds what
+traffic-light programs, the initial placement). :mod:`~flowrun.preflight.checks` holds what
 ``baseline``/``train``/``validate`` check before a run starts.
 """
 

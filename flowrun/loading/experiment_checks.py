@@ -18,8 +18,6 @@ setting to change:
 from __future__ import annotations
 
 import dataclasses
-import importlib
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -40,18 +38,6 @@ def sub_path(path: str) -> KeyPath:
         return parse_key(path)
     except ConfigError:
         return (path,)
-
-
-def optional(module: str, attr: str) -> Callable[..., Any] | None:
-    """``module.attr``, or ``None`` while that module is not written (or not installed)."""
-    try:
-        mod = importlib.import_module(module)
-    except ModuleNotFoundError as err:
-        if err.name and module.startswith(err.name):
-            return None
-        raise
-    found = getattr(mod, attr, None)
-    return found if callable(found) else None
 
 
 def check_experiment(cfg: ExperimentConfig, network: Any, loc: Locations) -> None:

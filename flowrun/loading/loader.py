@@ -8,7 +8,7 @@ inflow vehicle types, network-specific limits, and :mod:`flowrun.loading.experim
 step length, the seeded initial placement, departure speeds, training values). Settings that
 would have no effect are logged as warnings. The environment class is resolved when the
 environment is made (loading sits below ``flowrun.envs`` and does not import it);
-:mod:`flowrun.loading.preflight` (``flowrun validate``) resolves it too.
+:mod:`flowrun.preflight.checks` (``flowrun validate``) resolves it too.
 """
 
 from __future__ import annotations

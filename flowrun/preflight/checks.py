@@ -22,8 +22,10 @@ from typing import Any
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.params import is_rl
 from flowrun.config.yamlio import Locations
+from flowrun.envs.factory import env_class, make_network
 from flowrun.errors import ConfigError, TrainingError
-from flowrun.loading.experiment_checks import check_env_params, optional, sub_path
+from flowrun.fastring.plan import check_numpy_backend
+from flowrun.loading.experiment_checks import check_env_params, sub_path
 from flowrun.loading.flow_module import is_flow_module, load_any_config
 from flowrun.loading.loader import load_config_located
 from flowrun.suggest import did_you_mean
@@ -73,28 +75,24 @@ def preflight(cfg: ExperimentConfig, loc: Locations) -> None:
 def _check_numpy_backends(cfg: ExperimentConfig, loc: Locations) -> None:
     """``sim.backend: numpy`` and ``train.eval_backend: numpy`` on a config the numpy rings
     cannot run (what ``train`` checks before it starts)."""
-    checks = [("flowrun.fastring.plan", "check_numpy_backend")]
-    if cfg.train is not None and cfg.train.eval_backend == "numpy" and cfg.train.eval_freq > 0:
-        checks.append(("flowrun.training.numpy_eval", "numpy_eval_plan"))
-    for module, name in checks:
-        check = optional(module, name)
-        if check is None:
-            continue
-        try:
-            check(cfg)
-        except ConfigError as err:
-            raise _relocated(err, loc) from None
+    try:
+        check_numpy_backend(cfg)
+        if cfg.train is not None and cfg.train.eval_backend == "numpy" and cfg.train.eval_freq > 0:
+            from flowrun.training.numpy_eval import numpy_eval_plan
+
+            numpy_eval_plan(cfg)
+    except ConfigError as err:
+        raise _relocated(err, loc) from None
 
 
 def _check_rllib(cfg: ExperimentConfig, loc: Locations) -> None:
     """The RLlib backend's own check of ``train:`` (what ``train`` runs before it starts)."""
     if cfg.train is None or cfg.train.backend != "rllib":
         return
-    check = optional("flowrun.training.rllib.options", "check_train_config")
-    if check is None:
-        return
+    from flowrun.training.rllib.options import check_train_config
+
     try:
-        check(cfg.train)
+        check_train_config(cfg.train)
     except ConfigError as err:
         raise _relocated(err, loc) from None
     except (TrainingError, ModuleNotFoundError):
@@ -106,11 +104,8 @@ def _relocated(err: ConfigError, loc: Locations) -> ConfigError:
 
 
 def _env_class(cfg: ExperimentConfig, loc: Locations) -> Any:
-    find = optional("flowrun.envs.factory", "env_class")
-    if find is None:
-        return None
     try:
-        return find(cfg)
+        return env_class(cfg)
     except ConfigError as err:
         raise _relocated(err, loc) from None
 
@@ -119,8 +114,7 @@ def _check_env_network(cfg: ExperimentConfig, cls: Any, loc: Locations) -> None:
     """The env class's own check of its network (``check_network``, e.g. a signal env on a
     network without lights), where it has one; builds the network object, starts nothing."""
     check = getattr(cls, "check_network", None)
-    make_network = optional("flowrun.envs.factory", "make_network")
-    if check is None or make_network is None:
+    if check is None:
         return
     try:
         check(make_network(cfg))
@@ -152,11 +146,10 @@ def _check_hyperparam_names(cfg: ExperimentConfig, loc: Locations) -> None:
         return
     if importlib.util.find_spec("stable_baselines3") is None:
         return  # train refuses to start without the extra anyway, saying how to install it
-    build = optional("flowrun.training.algorithms", "build_hyperparams")
-    if build is None:
-        return
+    from flowrun.training.algorithms import build_hyperparams
+
     try:
-        build(train.algorithm, train.hyperparams)
+        build_hyperparams(train.algorithm, train.hyperparams)
     except ConfigError as err:
         raise _relocated(err, loc) from None
     except TrainingError:
@@ -168,11 +161,12 @@ def _check_policy(cfg: ExperimentConfig, loc: Locations) -> None:
     """``train.policy`` is one of the algorithm's policy names; ``policy_kwargs`` are
     arguments of that policy class (SB3 would fail with a TypeError after the envs started)."""
     train = cfg.train
-    find = optional("flowrun.training.algorithms", "algorithm_class")
-    if train is None or find is None:
+    from flowrun.training.algorithms import algorithm_class
+
+    if train is None:
         return
     try:
-        algo = find(train.algorithm)
+        algo = algorithm_class(train.algorithm)
     except (ConfigError, TrainingError):
         return
     policies: dict[str, Any] = dict(getattr(algo, "policy_aliases", {}) or {})

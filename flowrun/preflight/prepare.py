@@ -1,7 +1,7 @@
 """Everything ``flowrun train`` checks before it starts, in one place.
 
 :func:`prepare_training` loads the config (or the run folder's, for ``--resume``), runs the
-pre-flight checks (:func:`flowrun.loading.preflight.preflight`, at ``file:line``), checks the
+pre-flight checks (:func:`flowrun.preflight.checks.preflight`, at ``file:line``), checks the
 training library is installed and that the options fit the backend, and returns what to train
 with the notes to tell the user. Nothing is written; usable without the command line.
 """
@@ -16,7 +16,7 @@ from flowrun.config.yamlio import Locations
 from flowrun.errors import FlowrunError
 from flowrun.loading.flow_module import is_flow_module, load_any_config
 from flowrun.loading.loader import load_config, load_config_located
-from flowrun.loading.preflight import preflight
+from flowrun.preflight.checks import preflight
 from flowrun.rundir.train_state import read_metrics, run_state
 
 
