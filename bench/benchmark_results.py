@@ -7,6 +7,9 @@ training), and the benchmark's own baseline (``flowrun baseline`` with the bench
 overrides, all-human or SUMO's actuated lights) on the same seeds — and write
 ``bench/results/<benchmark>-<algorithm>-seed<k>.json``.
 
+``policy RUN_DIR``: copy a run's best policy (model, normalisation statistics, config, training
+metrics) to ``policies/<benchmark>/``, which ``flowrun eval`` takes like a run folder.
+
 ``table``: print the table built from ``bench/results/*.json`` (markdown); ``--readme FILE``
 also writes it between the ``<!-- benchmark-results:start/end -->`` markers of FILE.
 
@@ -18,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -99,6 +103,22 @@ def add(run_dir: Path, results: Path, model: str) -> Path:
     return path
 
 
+POLICY_FILES = ("config.yaml", "best_model.zip", "best_vecnormalize.pkl", "metrics.json",
+                "status.json")  # fmt: skip
+
+
+def export_policy(run_dir: Path, policies: Path) -> Path:
+    """``policies/<benchmark>/``: the run's best model and what ``flowrun eval`` needs."""
+    name = str(_config(run_dir).get("name"))
+    folder = policies / name
+    folder.mkdir(parents=True, exist_ok=True)
+    for file in POLICY_FILES:
+        if (run_dir / file).is_file():
+            shutil.copyfile(run_dir / file, folder / file)
+    print(f"{folder}: {', '.join(sorted(p.name for p in folder.iterdir()))}")
+    return folder
+
+
 def table(results: Path, readme: Path | None) -> str:
     """The markdown table; written into ``readme`` between the markers when given."""
     text = br.markdown_table(br.load_records(results))
@@ -119,6 +139,9 @@ def main() -> None:
     p_add.add_argument("runs", nargs="+", type=Path)
     p_add.add_argument("--model", default="best", choices=("best", "final"))
     p_add.add_argument("--results", type=Path, default=RESULTS)
+    p_policy = sub.add_parser("policy", help="copy a run's best policy to policies/<name>/")
+    p_policy.add_argument("run", type=Path)
+    p_policy.add_argument("--policies", type=Path, default=HERE.parent / "policies")
     p_table = sub.add_parser("table", help="print (and write into the README) the table")
     p_table.add_argument("--results", type=Path, default=RESULTS)
     p_table.add_argument("--readme", type=Path, default=None)
@@ -127,6 +150,8 @@ def main() -> None:
         args.results.mkdir(parents=True, exist_ok=True)
         for run in args.runs:
             add(run, args.results, args.model)
+    elif args.command == "policy":
+        export_policy(args.run, args.policies)
     else:
         print(table(args.results, args.readme), end="")
 
