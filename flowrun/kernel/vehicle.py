@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Sequence
+from itertools import islice
 from typing import Any
 
 import numpy as np
@@ -182,6 +183,42 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
     @property
     def _flow_counts(self) -> deque[tuple[int, int]]:
         return self.reader.flow_counts
+
+    # ------------------------------------------------------------------ departures, arrivals
+    def get_departed_ids(self) -> list[str]:
+        """Vehicles that entered the network in the last step."""
+        return list(self.departed_ids)
+
+    def get_arrived_ids(self) -> list[str]:
+        """Vehicles that left the network in the last step."""
+        return list(self.arrived_ids)
+
+    def get_num_arrived(self) -> int:
+        """Number of vehicles that left the network in the last step."""
+        return len(self.arrived_ids)
+
+    def get_num_not_departed(self) -> int:
+        """Vehicles SUMO has loaded (inflows) but not yet inserted, because there was no room
+        (Flow's ``get_num_not_departed``; 0 before the simulation starts)."""
+        if self.api is None:
+            return 0
+        return len(self.api.simulation.getPendingVehicles())
+
+    def get_inflow_rate(self, time_span: float) -> float:
+        """Vehicles that entered over the last ``time_span`` seconds, in veh/hour."""
+        return self._rate(time_span, 0)
+
+    def get_outflow_rate(self, time_span: float) -> float:
+        """Vehicles that left over the last ``time_span`` seconds, in veh/hour."""
+        return self._rate(time_span, 1)
+
+    def _rate(self, time_span: float, column: int) -> float:
+        steps = max(1, round(time_span / self.dt))
+        # the last ``steps`` entries only (the deque keeps up to 100,000 steps)
+        counts = [c[column] for c in islice(reversed(self._flow_counts), steps)]
+        if not counts:
+            return 0.0
+        return sum(counts) * 3600.0 / (len(counts) * self.dt)
 
     # ------------------------------------------------------------------ the step's state
     @property

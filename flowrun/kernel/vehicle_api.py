@@ -8,9 +8,8 @@ give Flow's error values (``-1001`` for numbers, ``""`` for edges) where Flow ha
 from __future__ import annotations
 
 import math
-from collections import deque
 from collections.abc import Iterable, Sequence
-from itertools import islice, repeat
+from itertools import repeat
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -33,21 +32,6 @@ ERROR = FLOW_ERROR
 
 #: Flow's vehicle colours (red, green, blue).
 RED, CYAN, WHITE = (255, 0, 0), (0, 255, 255), (255, 255, 255)
-
-
-def without_removed(
-    cmd: np.ndarray, table: Population, removed: Iterable[str], back: Iterable[str]
-) -> np.ndarray:
-    """``cmd`` (one acceleration per row) with no command (NaN) for the cars removed this
-    step and not put back: Flow commands only the cars it still lists, and a car re-added
-    with ``k.vehicle.add`` is a new car SUMO has not inserted yet (``back``)."""
-    again = set(back)
-    rows = [table.row(v) for v in removed if v in table and v not in again]
-    if not rows:
-        return cmd
-    cmd = cmd.copy()
-    cmd[rows] = np.nan
-    return cmd
 
 
 class FlowVehicleGetters:
@@ -73,18 +57,6 @@ class FlowVehicleGetters:
         self._observed: dict[str, None] = {}
         self._leader_ids: tuple[np.ndarray | None, list[str]] = (None, [])
         self._initial_row_cache: dict[str, int] | None = None
-
-    @property
-    def departed_ids(self) -> Sequence[str]:  # implemented by the kernel
-        raise NotImplementedError
-
-    @property
-    def arrived_ids(self) -> Sequence[str]:  # implemented by the kernel
-        raise NotImplementedError
-
-    @property
-    def _flow_counts(self) -> deque[tuple[int, int]]:  # implemented by the kernel
-        raise NotImplementedError
 
     # ------------------------------------------------------------------ Flow's getters
     @property
@@ -355,42 +327,6 @@ class FlowVehicleGetters:
         if veh_id not in self.table:
             return ()
         return tuple(self.api.vehicle.getRoute(veh_id))
-
-    # ------------------------------------------------------------------ departures, arrivals
-    def get_departed_ids(self) -> list[str]:
-        """Vehicles that entered the network in the last step."""
-        return list(self.departed_ids)
-
-    def get_arrived_ids(self) -> list[str]:
-        """Vehicles that left the network in the last step."""
-        return list(self.arrived_ids)
-
-    def get_num_arrived(self) -> int:
-        """Number of vehicles that left the network in the last step."""
-        return len(self.arrived_ids)
-
-    def get_num_not_departed(self) -> int:
-        """Vehicles SUMO has loaded (inflows) but not yet inserted, because there was no room
-        (Flow's ``get_num_not_departed``; 0 before the simulation starts)."""
-        if self.api is None:
-            return 0
-        return len(self.api.simulation.getPendingVehicles())
-
-    def get_inflow_rate(self, time_span: float) -> float:
-        """Vehicles that entered over the last ``time_span`` seconds, in veh/hour."""
-        return self._rate(time_span, 0)
-
-    def get_outflow_rate(self, time_span: float) -> float:
-        """Vehicles that left over the last ``time_span`` seconds, in veh/hour."""
-        return self._rate(time_span, 1)
-
-    def _rate(self, time_span: float, column: int) -> float:
-        steps = max(1, round(time_span / self.dt))
-        # the last ``steps`` entries only (the deque keeps up to 100,000 steps)
-        counts = [c[column] for c in islice(reversed(self._flow_counts), steps)]
-        if not counts:
-            return 0.0
-        return sum(counts) * 3600.0 / (len(counts) * self.dt)
 
     # ------------------------------------------------------------------ lanes around a car
     def get_lane_leaders(self, veh_id: str) -> list[str]:

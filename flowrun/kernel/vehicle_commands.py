@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from itertools import repeat
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from flowrun.kernel.vehicle_api import ERROR, without_removed
+from flowrun.kernel.vehicle_api import ERROR
 
 if TYPE_CHECKING:
     from flowrun.kernel.open_reader import OpenReader
@@ -35,6 +35,21 @@ SLOW_DOWN_DURATION = 1e-3
 #: ``changeLane`` duration, s: Flow's, so a commanded car keeps its new lane
 LANE_CHANGE_HOLD = 100000.0
 #: Flow's value for "no such vehicle" (``get_last_lc`` of an unknown or non-RL car)
+
+
+def without_removed(
+    cmd: np.ndarray, table: Population, removed: Iterable[str], back: Iterable[str]
+) -> np.ndarray:
+    """``cmd`` (one acceleration per row) with no command (NaN) for the cars removed this
+    step and not put back: Flow commands only the cars it still lists, and a car re-added
+    with ``k.vehicle.add`` is a new car SUMO has not inserted yet (``back``)."""
+    again = set(back)
+    rows = [table.row(v) for v in removed if v in table and v not in again]
+    if not rows:
+        return cmd
+    cmd = cmd.copy()
+    cmd[rows] = np.nan
+    return cmd
 
 
 class LaneChangeLog:
