@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Sequence
 from itertools import islice
+from operator import attrgetter
 from typing import Any
 
 import numpy as np
@@ -30,6 +31,12 @@ from flowrun.networks.base import NetworkSpec
 from flowrun.types import BoolArray, CarFollowingInputs, FloatArray, IntArray
 
 __all__ = ["VehicleKernel", "ring_fast_path"]
+
+
+def _of_state(name: str) -> Any:
+    """A read-only kernel attribute that is the field ``name`` of the step's state (a
+    C-level getter: reading it runs no Python frame)."""
+    return property(attrgetter(f"state.{name}"), doc=f"The step's ``state.{name}``.")
 
 
 class VehicleKernel(VehicleCommands, FlowVehicleGetters):
@@ -221,102 +228,24 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         return sum(counts) * 3600.0 / (len(counts) * self.dt)
 
     # ------------------------------------------------------------------ the step's state
-    @property
-    def speed(self) -> FloatArray:
-        """Speed of every car, m/s."""
-        return self.state.speed
-
-    @property
-    def prev_speed(self) -> FloatArray:
-        """Speed of every car one step before, m/s."""
-        return self.state.prev_speed
-
-    @property
-    def accel_real(self) -> FloatArray:
-        """Acceleration realised over the last step, m/s^2."""
-        return self.state.accel_real
-
-    @property
-    def position(self) -> FloatArray:
-        """Position along the network, m (on a ring: around it)."""
-        return self.state.position
-
-    @property
-    def lanes(self) -> IntArray:
-        """Lane index of every car."""
-        return self.state.lanes
-
-    @property
-    def lane_pos(self) -> FloatArray:
-        """Position of every car on its lane, m."""
-        return self.state.lane_pos
-
-    @property
-    def edges(self) -> list[str]:
-        """Edge id of every car."""
-        return self.state.edges
-
-    @property
-    def edge_index(self) -> IntArray | None:
-        """Every car's edge as an index into :attr:`edge_names` (``None`` on a closed ring)."""
-        return self.state.edge_index
-
-    @property
-    def x(self) -> FloatArray:
-        """Map x coordinate of every car, m."""
-        return self.state.x
-
-    @property
-    def y(self) -> FloatArray:
-        """Map y coordinate of every car, m."""
-        return self.state.y
-
-    @property
-    def odometer(self) -> FloatArray:
-        """Distance every car has driven since it entered, m (SUMO's ``getDistance``)."""
-        return self.state.odometer
-
-    @property
-    def speed_limit(self) -> FloatArray:
-        """The speed limit where each car is, m/s."""
-        return self.state.speed_limit
-
-    @property
-    def on_internal(self) -> BoolArray:
-        """Whether each car is on a junction-internal lane."""
-        return self.state.on_internal
-
-    @property
-    def leader(self) -> IntArray:
-        """Row of the car ahead, -1 for none."""
-        return self.state.leader
-
-    @property
-    def follower(self) -> IntArray:
-        """Row of the car behind, -1 for none."""
-        return self.state.follower
-
-    @property
-    def headway(self) -> FloatArray:
-        """Gap from the front bumper to the leader's rear bumper, m (``inf``: no leader)."""
-        return self.state.headway
-
-    @property
-    def tailway(self) -> FloatArray:
-        """Gap from the follower's front bumper to this car's rear bumper, m."""
-        return self.state.tailway
-
-    @property
-    def leader_speed(self) -> FloatArray:
-        """The leader's speed (the car's own without one), m/s."""
-        return self.state.leader_speed
-
-    @property
-    def follower_speed(self) -> FloatArray:
-        """The follower's speed (the car's own without one), m/s."""
-        return self.state.follower_speed
-
-    @property
-    def follower_headway(self) -> FloatArray:
-        """The follower's headway, m (``inf`` without a follower)."""
-        return self.state.follower_headway
+    # the fields of :class:`~flowrun.kernel.state.RingState` / ``OpenState`` (meaning, units)
+    speed: FloatArray = _of_state("speed")
+    prev_speed: FloatArray = _of_state("prev_speed")
+    accel_real: FloatArray = _of_state("accel_real")
+    position: FloatArray = _of_state("position")
+    lanes: IntArray = _of_state("lanes")
+    lane_pos: FloatArray = _of_state("lane_pos")
+    edges: list[str] = _of_state("edges")
+    edge_index: IntArray | None = _of_state("edge_index")
+    x: FloatArray = _of_state("x")
+    y: FloatArray = _of_state("y")
+    odometer: FloatArray = _of_state("odometer")
+    speed_limit: FloatArray = _of_state("speed_limit")
+    on_internal: BoolArray = _of_state("on_internal")
+    leader: IntArray = _of_state("leader")
+    follower: IntArray = _of_state("follower")
+    headway: FloatArray = _of_state("headway")
+    tailway: FloatArray = _of_state("tailway")
+    leader_speed: FloatArray = _of_state("leader_speed")
+    follower_speed: FloatArray = _of_state("follower_speed")
+    follower_headway: FloatArray = _of_state("follower_headway")
