@@ -7,16 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from flowrun.config.model import ExperimentConfig, NetworkConfig
-from flowrun.config.params import (
-    ControllerSpec,
-    EnvParams,
-    InitialConfig,
-    NetParams,
-    SumoCarFollowingParams,
-    SumoParams,
-    VehicleParams,
-)
+from flowrun.config.model import ExperimentConfig
 from flowrun.config.signal_control import network_programs
 from flowrun.envs.base import Env, check_additional_params
 from flowrun.envs.registry import resolve_env_class
@@ -76,45 +67,6 @@ def make_env(
     return cls(cfg.env, cfg.sim, network, render_mode=render_mode, work_dir=work_dir)
 
 
-def default_config(env_name: str) -> ExperimentConfig:
-    """The ring experiment each built-in env is registered with.
-
-    As ``configs/ring_wave.yaml`` (Flow's "stabilizing the ring"): 21 IDM drivers with noise
-    0.2 and one AV on a 230 m ring (two lanes and 43 drivers for ``LaneChangeAccelEnv``),
-    3000 steps after a 750-step warm-up; the env's own ``ADDITIONAL_ENV_PARAMS``.
-    """
-    cls = resolve_env_class(env_name)
-    additional = dict(getattr(cls, "ADDITIONAL_ENV_PARAMS", {}))
-    lanes = 2 if env_name == "LaneChangeAccelEnv" else 1
-    vehicles = VehicleParams()
-    vehicles.add(
-        veh_id="rl",
-        acceleration_controller=ControllerSpec("RLController"),
-        routing_controller=ControllerSpec("ContinuousRouter"),
-        num_vehicles=1,
-        # Flow's default: SUMO's safe-speed check caps the AV's commands (no crashes)
-        car_following_params=SumoCarFollowingParams(speed_mode="right_of_way"),
-    )
-    vehicles.add(
-        veh_id="idm",
-        acceleration_controller=ControllerSpec("IDM", {"noise": 0.2}),
-        routing_controller=ControllerSpec("ContinuousRouter"),
-        num_vehicles=21 if lanes == 1 else 43,
-    )
-    return ExperimentConfig(
-        name=env_name,
-        sim=SumoParams(sim_step=0.1, seed=0),
-        env=EnvParams(
-            additional_params=additional, horizon=3000, warmup_steps=750, env_class=env_name
-        ),
-        network=NetworkConfig(
-            "ring", NetParams({"length": 230, "lanes": lanes, "speed_limit": 30, "resolution": 40})
-        ),
-        vehicles=vehicles,
-        initial=InitialConfig(bunching=20, spacing="uniform"),
-    )
-
-
 #: The repository's experiment files, which the envs' ``DEFAULT_EXPERIMENT`` names.
 CONFIGS_DIR = Path(__file__).resolve().parents[2] / "configs"
 
@@ -124,13 +76,18 @@ def default_experiment(env_name: str) -> ExperimentConfig:
 
     The file its class names in ``DEFAULT_EXPERIMENT`` (a path under :data:`CONFIGS_DIR`),
     with ``env.class`` set to ``env_name`` and the keys of the class's
-    ``ADDITIONAL_ENV_PARAMS`` the file lacks filled in; Flow's ring task
-    (:func:`default_config`) for a class that names none.
+    ``ADDITIONAL_ENV_PARAMS`` the file lacks filled in.
+
+    Raises:
+        ConfigError: the class names no file (give the env a config).
     """
     cls = resolve_env_class(env_name)
     file = getattr(cls, "DEFAULT_EXPERIMENT", None)
     if file is None:
-        return default_config(env_name)
+        raise ConfigError(
+            f"{env_name} names no DEFAULT_EXPERIMENT; give it a config "
+            "(gymnasium.make(..., config='my.yaml'))"
+        )
     cfg = load_config(CONFIGS_DIR / file)
     params = {**getattr(cls, "ADDITIONAL_ENV_PARAMS", {}), **cfg.env.additional_params}
     return replace(cfg, env=replace(cfg.env, env_class=env_name, additional_params=params))

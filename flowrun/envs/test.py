@@ -21,6 +21,8 @@ from flowrun.envs.base import Env
 class TestEnv(Env):
     """An environment that only runs the human drivers (see the module docstring)."""
 
+    DEFAULT_EXPERIMENT = "envs/ring.yaml"
+
     __test__ = False  # not a pytest test class despite its name
 
     @property

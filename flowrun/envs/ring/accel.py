@@ -155,6 +155,8 @@ class AccelEnv(RingAccelBase):
     Termination: collision; truncation: horizon.
     """
 
+    DEFAULT_EXPERIMENT = "envs/ring.yaml"
+
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
     RING_TASK: ClassVar[type[RingTask]] = AccelTask
 

@@ -48,6 +48,8 @@ class LaneChangeAccelEnv(AccelEnv):
     Termination: collision; truncation: horizon.
     """
 
+    DEFAULT_EXPERIMENT = "envs/ring_lane_change.yaml"  # a two-lane ring
+
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
     @property
@@ -128,6 +130,8 @@ class LaneChangeAccelPOEnv(LaneChangeAccelEnv):
     speed / max speed. All in [0, 1] (Flow divides only some of these and appends raw
     speeds; flowrun normalises all). Actions and reward as :class:`LaneChangeAccelEnv`.
     """
+
+    DEFAULT_EXPERIMENT = "envs/ring.yaml"  # one lane (LaneChangeAccelEnv's file has two)
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)

@@ -85,6 +85,8 @@ class WaveAttenuationEnv(RingAccelBase):
     mean speed in evaluate mode; 0 after a collision and when no action is given (warm-up).
     """
 
+    DEFAULT_EXPERIMENT = "envs/ring.yaml"
+
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
