@@ -41,7 +41,7 @@ def sub_path(path: str) -> KeyPath:
 
 
 def check_experiment(cfg: ExperimentConfig, network: Any, loc: Locations) -> None:
-    """Run the checks above (``network`` is ``None`` while networks are not importable).
+    """Run the checks above on the config and its built ``network``.
 
     Raises:
         ConfigError: the first problem, located.
@@ -49,8 +49,6 @@ def check_experiment(cfg: ExperimentConfig, network: Any, loc: Locations) -> Non
     check_env_params(cfg.env.additional_params, {}, loc)
     _check_train_values(cfg, loc)
     _check_sublane(cfg, loc)
-    if network is None:
-        return
     _check_network_inputs(cfg, network, loc)
     _check_step(cfg, network, loc)
     _check_start(cfg, network, loc)

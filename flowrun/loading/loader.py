@@ -162,11 +162,10 @@ def _build(data: dict[str, Any], loc: Locations) -> ExperimentConfig:
         )
     _check_network(cfg, loc)
     network = _build_network(cfg, loc)
-    edges = None if network is None else [edge.id for edge in network.spec.edges]
-    _check_inflows(cfg, edges, loc, None if network is None else network.vehicles.type_names)
-    if network is not None:
-        _check_inflow_routes(cfg, network, loc)
-        _check_traffic_lights(cfg, network, loc)
+    edges = [edge.id for edge in network.spec.edges]
+    _check_inflows(cfg, edges, loc, network.vehicles.type_names)
+    _check_inflow_routes(cfg, network, loc)
+    _check_traffic_lights(cfg, network, loc)
     check_experiment(cfg, network, loc)
     for path, why in ignored_settings(cfg):
         log.warning("%s: %s %s", loc.of(path), format_path(path), why)
