@@ -40,20 +40,20 @@ def _target_norm(n: int, target_velocity: float) -> float:
 def wave_attenuation_terms(
     speeds: FloatArray, rl_actions: FloatArray | None, fail: bool = False
 ) -> dict[str, float]:
-    """Flow's ring reward, by term: ``4 * mean(v) / 20`` minus ``4 * mean(|a_rl|)``.
+    """Flow's ring reward, by term, of one ring: ``4 * mean(v) / 20`` minus ``4 * mean(|a_rl|)``
+    (:func:`wave_attenuation_rewards`' terms for a batch of one).
 
     Returns:
         ``{"speed": ..., "accel_penalty": ...}``; both 0 after a collision.
     """
-    if fail or speeds.size == 0 or speeds.min() < -100:
+    if fail or speeds.size == 0:
         return {"speed": 0.0, "accel_penalty": 0.0}
-    speed_term = 4.0 * (float(speeds.sum()) / speeds.size) / 20.0
-    penalty = 0.0
-    if rl_actions is not None and np.size(rl_actions):
-        actions = np.abs(np.asarray(rl_actions, dtype=np.float64))
-        mean_abs = float(actions.sum()) / actions.size
-        penalty = -4.0 * mean_abs if mean_abs > 0 else 0.0
-    return {"speed": speed_term, "accel_penalty": penalty}
+    actions = np.zeros((0, 1)) if rl_actions is None else np.asarray(rl_actions, np.float64)
+    speed, penalty, bad = _wave_terms(speeds.reshape(-1, 1), actions.reshape(-1, 1))
+    if bad[0]:
+        return {"speed": 0.0, "accel_penalty": 0.0}
+    accel_penalty = 0.0 if penalty is None else float(penalty[0])
+    return {"speed": float(speed[0]), "accel_penalty": accel_penalty}
 
 
 def min_delay_terms(speeds: FloatArray, v_top: float, dt: float) -> tuple[float, float]:
@@ -91,10 +91,25 @@ def power_demand(speeds: FloatArray, previous_speeds: FloatArray, dt: float) -> 
     )
 
 
+def _wave_terms(
+    speeds: FloatArray, rl_actions: FloatArray
+) -> tuple[FloatArray, FloatArray | None, npt.NDArray[np.bool_]]:
+    """The speed term, the acceleration penalty (``None`` without RL cars) and whether a ring's
+    speeds are out of range, per ring (speeds ``(N, B)``, actions ``(num_rl, B)``)."""
+    n = speeds.shape[0]
+    speed_term = 4.0 * (speeds.sum(axis=0) / n) / 20.0
+    penalty = None
+    if rl_actions.shape[0]:
+        mean_abs = np.abs(rl_actions).sum(axis=0) / rl_actions.shape[0]
+        penalty = np.where(mean_abs > 0, -4.0 * mean_abs, 0.0)
+    return speed_term, penalty, speeds.min(axis=0) < -100
+
+
 def wave_attenuation_rewards(
     speeds: FloatArray, rl_actions: FloatArray, fail: npt.NDArray[np.bool_]
 ) -> FloatArray:
-    """:func:`wave_attenuation_terms` summed, for many rings at once (the numpy backend).
+    """Flow's ring reward, ``4 * mean(v) / 20 - 4 * mean(|a|)``, of many rings at once (the
+    numpy backend; :func:`wave_attenuation_terms` gives one ring's terms).
 
     Args:
         speeds: speeds, m/s, shape ``(N, B)``: ``N`` cars on each of ``B`` rings.
@@ -102,17 +117,11 @@ def wave_attenuation_rewards(
         fail: whether each ring had a collision, ``(B,)``.
 
     Returns:
-        ``4 * mean(v) / 20 - 4 * mean(|a|)`` per ring, 0 where ``fail``.
+        the reward per ring, 0 where ``fail``.
     """
-    n = speeds.shape[0]
-    speed_term = 4.0 * (speeds.sum(axis=0) / n) / 20.0
-    if rl_actions.shape[0]:
-        mean_abs = np.abs(rl_actions).sum(axis=0) / rl_actions.shape[0]
-        reward = speed_term + np.where(mean_abs > 0, -4.0 * mean_abs, 0.0)
-    else:
-        reward = speed_term
-    bad = fail | (speeds.min(axis=0) < -100)
-    return np.where(bad, 0.0, reward)
+    speed_term, penalty, bad = _wave_terms(speeds, rl_actions)
+    reward = speed_term if penalty is None else speed_term + penalty
+    return np.where(fail | bad, 0.0, reward)
 
 
 def desired_velocities(

@@ -165,7 +165,8 @@ class WaveTask(RingTask):
 
     def rewards(self, rings: RingBatch, accel: FloatArray, crashed: BoolArray) -> FloatArray:
         """Speed term minus acceleration penalty (0 after a collision); the mean speed
-        when evaluating."""
+        when evaluating. The SUMO env's terms (``wave_attenuation_terms``) are the same
+        formula for a batch of one."""
         if self.evaluate:
             return np.asarray(rings.speed.mean(axis=0), dtype=np.float64)
         return wave_attenuation_rewards(rings.speed, accel, crashed)
