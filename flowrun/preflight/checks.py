@@ -24,7 +24,6 @@ from flowrun.config.params import is_rl
 from flowrun.config.yamlio import Locations
 from flowrun.envs.factory import env_class, make_network
 from flowrun.errors import ConfigError, TrainingError
-from flowrun.fastring.plan import check_numpy_backend
 from flowrun.loading.experiment_checks import check_env_params, sub_path
 from flowrun.loading.flow_module import is_flow_module, load_any_config
 from flowrun.loading.loader import load_config_located
@@ -75,6 +74,8 @@ def preflight(cfg: ExperimentConfig, loc: Locations) -> None:
 def _check_numpy_backends(cfg: ExperimentConfig, loc: Locations) -> None:
     """``sim.backend: numpy`` and ``train.eval_backend: numpy`` on a config the numpy rings
     cannot run (what ``train`` checks before it starts)."""
+    from flowrun.fastring.plan import check_numpy_backend  # only when a config trains
+
     try:
         check_numpy_backend(cfg)
         if cfg.train is not None and cfg.train.eval_backend == "numpy" and cfg.train.eval_freq > 0:
