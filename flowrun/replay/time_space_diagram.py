@@ -10,26 +10,33 @@ functions here take the log's path and reuse :mod:`flowrun.replay`::
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import Any
 
 from flowrun.recording import open_log
 from flowrun.replay.analysis import TimeSpace, time_space_points
 from flowrun.replay.plots import plot_stride, plot_time_space
-from flowrun.types import FloatArray
+from flowrun.replay.trajectory import import_data_from_trajectory, plot_tsd, time_space_segments
 
 
 def get_time_space_data(
-    mcap_path: str | os.PathLike[str],
+    mcap_path: str | os.PathLike[str] | Any,
+    params: Mapping[str, Any] | None = None,
     *,
     start_s: float | None = None,
     end_s: float | None = None,
     vehicles: Iterable[str] | None = None,
-) -> tuple[FloatArray, FloatArray, FloatArray, list[str]]:
+) -> tuple[Any, ...]:
     """The diagram's points: one per vehicle per logged step.
+
+    Given Flow's arguments instead — the DataFrame of
+    :func:`~flowrun.replay.trajectory.import_data_from_trajectory` and ``flow_params`` — it
+    returns Flow's ``(segs, data)`` (:func:`~flowrun.replay.trajectory.time_space_segments`).
 
     Args:
         mcap_path: a flowrun MCAP log.
+        params: Flow's ``flow_params`` (with a DataFrame only).
         start_s, end_s: time window, s (``None``: from the start / to the end).
         vehicles: only these vehicle ids (``None``: all).
 
@@ -39,6 +46,8 @@ def get_time_space_data(
     Raises:
         RecordingError: the file is missing or not a flowrun log.
     """
+    if not isinstance(mcap_path, str | os.PathLike):
+        return time_space_segments(mcap_path, params)
     ts = time_space_points(open_log(mcap_path), start_s=start_s, end_s=end_s, vehicles=vehicles)
     return ts.times, ts.positions, ts.speeds, [str(i) for i in ts.ids]
 
@@ -77,4 +86,9 @@ def time_space_diagram(
     return plot_time_space(log, out, data=data)
 
 
-__all__ = ["get_time_space_data", "time_space_diagram"]
+__all__ = [
+    "get_time_space_data",
+    "import_data_from_trajectory",
+    "plot_tsd",
+    "time_space_diagram",
+]
