@@ -72,10 +72,3 @@ def test_unknown_command_is_refused_with_a_suggestion() -> None:
     result = CliRunner().invoke(app, ["baselin"])
     assert result.exit_code == 2
     assert "baseline" in result.output
-
-
-def test_validate_without_training_loads_no_log_writer_or_simulator() -> None:
-    loaded = modules_after("validate", "configs/sugiyama.yaml")
-    assert "flowrun.preflight.checks" in loaded
-    for heavy in ("mcap", "google.protobuf", "libsumo", "matplotlib", "torch"):
-        assert heavy not in loaded, heavy
