@@ -81,7 +81,6 @@ OUT_OF_SCOPE: dict[tuple[str, str], str] = {
 #: does not read yet.
 NOT_YET: dict[str, tuple[str, ...]] = {
     "flow.core.rewards": ("miles_per_gallon",),
-    "flow.visualize.visualizer_rllib": ("visualizer_rllib", "create_parser"),
 }  # fmt: skip
 
 

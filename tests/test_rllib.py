@@ -157,6 +157,27 @@ def test_evaluate_a_checkpoint_to_mcap(ring_run: Path) -> None:
     ]
 
 
+def test_flows_visualizer_rllib_replays_a_checkpoint(
+    ring_run: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from flowrun.visualize.visualizer_rllib import create_parser, visualizer_rllib
+
+    argv = [str(ring_run), "2", "--num_rollouts", "2", "--horizon", "20", "--gen_emission"]
+    result = visualizer_rllib(create_parser().parse_args(argv))
+    assert result.model == ring_run / "checkpoints" / "iter_000002"
+    assert [p.name for p in result.logs[:2]] == ["policy_0.mcap", "policy_1.mcap"]
+    assert open_log(result.logs[0]).frame_count == 31  # reset + 10 warm-up + --horizon 20
+    out = capsys.readouterr().out
+    assert f"Round 1, return: {result.policy[1].episode_return}" in out
+    returns = [m.episode_return for m in result.policy]
+    assert f"Average, std returns: {np.mean(returns)}, {np.std(returns)}" in out
+    emission = result.out_dir / "policy_0_emission.csv"
+    header, *rows = emission.read_text().splitlines()
+    assert header.startswith("time,id,x,y,speed") and len(rows) == 22 * 31
+    with pytest.raises(TrainingError, match="--run DQN differs from the algorithm"):
+        visualizer_rllib(create_parser().parse_args([str(ring_run), "2", "--run", "DQN"]))
+
+
 # ---------------------------------------------------------------- training, multi-agent
 def test_multi_agent_grid_trains_evaluates_and_repeats(local_ray: None, tmp_path: Path) -> None:
     """Sampling in the driver (0 env runners): one shared policy for the 9 lights."""
