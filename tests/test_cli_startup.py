@@ -41,6 +41,21 @@ def test_quick_commands_import_no_heavy_library(argv: tuple[str, ...]) -> None:
     assert "flowrun.cli.commands_run" not in loaded
 
 
+def test_list_envs_imports_no_env_class_nor_the_kernel() -> None:
+    loaded = modules_after("list", "envs")
+    assert "flowrun.kernel" not in loaded
+    assert "flowrun.envs.base" not in loaded
+    assert "flowrun.recording" not in loaded
+
+
+def test_env_names_are_the_classes_names() -> None:
+    from flowrun.envs.registry import ALIAS_NAMES, ENV_NAMES, env_classes, resolve_env_class
+
+    assert [c.__name__ for c in env_classes()] == list(ENV_NAMES)
+    for alias, name in ALIAS_NAMES.items():
+        assert resolve_env_class(alias).__name__ == name
+
+
 def test_version_prints_the_package_version() -> None:
     result = CliRunner().invoke(app, ["--version"])
     assert result.exit_code == 0

@@ -10,29 +10,14 @@ from __future__ import annotations
 import importlib
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import gymnasium
-
-from flowrun.envs.base import Env
-from flowrun.envs.bottleneck import (
-    BottleneckAccelEnv,
-    BottleneckDesiredVelocityEnv,
-    BottleneckEnv,
-)
-from flowrun.envs.merge import MergePOEnv
-from flowrun.envs.ring.accel import AccelEnv
-from flowrun.envs.ring.lane_change import LaneChangeAccelEnv, LaneChangeAccelPOEnv
-from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
-from flowrun.envs.test import TestEnv
-from flowrun.envs.traffic_light_grid import (
-    TrafficLightGridBenchmarkEnv,
-    TrafficLightGridEnv,
-    TrafficLightGridPOEnv,
-)
 from flowrun.errors import ConfigError
 from flowrun.import_path import import_near
 from flowrun.suggest import did_you_mean, unknown_name
+
+if TYPE_CHECKING:
+    from flowrun.envs.base import Env
 
 #: ``env.class`` name -> ``module:Class`` of each multi-agent environment.
 MULTIAGENT_ENVS: dict[str, str] = {
@@ -50,33 +35,71 @@ MULTIAGENT_ENVS: dict[str, str] = {
 INSTALL_HINT = "pip install 'flowrun[multiagent]'  (or: pip install pettingzoo==1.27.0)"
 
 
-#: flowrun's own environment classes, each registered under its class name.
-ENV_CLASSES: tuple[type[Env], ...] = (
-    AccelEnv,
-    WaveAttenuationEnv,
-    WaveAttenuationPOEnv,
-    LaneChangeAccelEnv,
-    LaneChangeAccelPOEnv,
-    MergePOEnv,
-    BottleneckEnv,
-    BottleneckAccelEnv,
-    BottleneckDesiredVelocityEnv,
-    TestEnv,
-    TrafficLightGridEnv,
-    TrafficLightGridPOEnv,
-    TrafficLightGridBenchmarkEnv,
+#: The names of flowrun's own environment classes (each registered under its class name),
+#: listed without importing the classes; ``_builtin`` imports them.
+ENV_NAMES: tuple[str, ...] = (
+    "AccelEnv",
+    "WaveAttenuationEnv",
+    "WaveAttenuationPOEnv",
+    "LaneChangeAccelEnv",
+    "LaneChangeAccelPOEnv",
+    "MergePOEnv",
+    "BottleneckEnv",
+    "BottleneckAccelEnv",
+    "BottleneckDesiredVelocityEnv",
+    "TestEnv",
+    "TrafficLightGridEnv",
+    "TrafficLightGridPOEnv",
+    "TrafficLightGridBenchmarkEnv",
 )
-#: Flow's old names of some of them.
-ALIASES: dict[str, type[Env]] = {"DesiredVelocityEnv": BottleneckDesiredVelocityEnv}
+#: Flow's old names of some of them -> the class name.
+ALIAS_NAMES: dict[str, str] = {"DesiredVelocityEnv": "BottleneckDesiredVelocityEnv"}
+
+
+def env_classes() -> tuple[type[Env], ...]:
+    """flowrun's own environment classes, in the order of :data:`ENV_NAMES` (imported here,
+    so that listing the names imports none of them)."""
+    from flowrun.envs.bottleneck import (
+        BottleneckAccelEnv,
+        BottleneckDesiredVelocityEnv,
+        BottleneckEnv,
+    )
+    from flowrun.envs.merge import MergePOEnv
+    from flowrun.envs.ring.accel import AccelEnv
+    from flowrun.envs.ring.lane_change import LaneChangeAccelEnv, LaneChangeAccelPOEnv
+    from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
+    from flowrun.envs.test import TestEnv
+    from flowrun.envs.traffic_light_grid import (
+        TrafficLightGridBenchmarkEnv,
+        TrafficLightGridEnv,
+        TrafficLightGridPOEnv,
+    )
+
+    return (
+        AccelEnv,
+        WaveAttenuationEnv,
+        WaveAttenuationPOEnv,
+        LaneChangeAccelEnv,
+        LaneChangeAccelPOEnv,
+        MergePOEnv,
+        BottleneckEnv,
+        BottleneckAccelEnv,
+        BottleneckDesiredVelocityEnv,
+        TestEnv,
+        TrafficLightGridEnv,
+        TrafficLightGridPOEnv,
+        TrafficLightGridBenchmarkEnv,
+    )
 
 
 def _builtin() -> dict[str, type[Env]]:
-    return {c.__name__: c for c in ENV_CLASSES} | ALIASES
+    classes = {c.__name__: c for c in env_classes()}
+    return classes | {alias: classes[name] for alias, name in ALIAS_NAMES.items()}
 
 
 def env_names() -> list[str]:
     """Names a config may use as ``env.class`` (the multi-agent ones need PettingZoo)."""
-    return sorted([*_builtin(), *MULTIAGENT_ENVS])
+    return sorted([*ENV_NAMES, *ALIAS_NAMES, *MULTIAGENT_ENVS])
 
 
 def _multiagent_class(name: str) -> type | None:
@@ -114,18 +137,17 @@ def resolve_env_class(name: str | None, search_dir: str | Path | None = None) ->
     """
     if name is None:
         name = "AccelEnv"
-    builtin = _builtin()
     multiagent = _multiagent_class(name)
     if multiagent is not None:
         return multiagent
     if ":" not in name:
-        if name not in builtin:
+        if name not in ENV_NAMES and name not in ALIAS_NAMES:
             raise ConfigError(
                 unknown_name("environment", name, env_names())
                 + ", or an import path 'package.module:Class'",
                 path="env.class",
             )
-        return builtin[name]
+        return _builtin()[name]
     module_name, _, attr = name.partition(":")
     folder = None if search_dir is None else Path(search_dir)
     module = import_near(module_name, name, folder, "environment", "env.class")
@@ -133,6 +155,8 @@ def resolve_env_class(name: str | None, search_dir: str | Path | None = None) ->
 
 
 def _env_class(module: ModuleType, module_name: str, attr: str, name: str) -> type:
+    from flowrun.envs.base import Env
+
     obj: Any = getattr(module, attr, None)
     if obj is None:
         envs = [  # classes defined here under their own name (no aliases or imports)
@@ -160,7 +184,10 @@ def register_envs() -> None:
     Without a ``config`` an env runs the experiment it comes with
     (:func:`flowrun.envs.factory.default_experiment`).
     """
-    for name in sorted(_builtin()):  # the multi-agent envs are PettingZoo envs, not Gymnasium's
+    import gymnasium
+
+    # the multi-agent envs are PettingZoo envs, not Gymnasium's
+    for name in sorted([*ENV_NAMES, *ALIAS_NAMES]):
         env_id = f"flowrun/{name}-v0"
         if env_id in gymnasium.registry:
             continue
