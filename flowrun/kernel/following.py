@@ -135,6 +135,57 @@ def leaders_by_lane(
     return leader, follower, headway, fronts, rears
 
 
+#: Up to this many cars, :func:`leaders_small` and :func:`followers_small` (plain Python on
+#: lists) are faster than the numpy functions, whose cost is mostly per call; above, numpy.
+SMALL = 48
+_INF = float("inf")
+
+
+def leaders_small(
+    lane_key: list[int], lane_pos: list[float], lengths: list[float]
+) -> tuple[list[int], list[float], list[int], list[int]]:
+    """:func:`leaders_by_lane` on lists, for few cars: the same leaders, the same headways
+    (bit for bit: the same float operations in the same order), fronts and rears in the same
+    order (by lane key); no followers (:func:`followers_small` finds them).
+
+    Returns:
+        leader rows (-1 for none), headways (m, ``inf`` without leader), the frontmost car of
+        every occupied lane and the rearmost.
+    """
+    n = len(lane_key)
+    leader, headway = [-1] * n, [_INF] * n
+    fronts: list[int] = []
+    rears: list[int] = []
+    prev, prev_key, prev_pos = -1, -1, 0.0
+    # by lane, then position, then row: the order of the stable lexsort
+    for k, p, i in sorted(zip(lane_key, lane_pos, range(n), strict=True)):
+        if k == prev_key and prev >= 0:
+            leader[prev] = i
+            headway[prev] = p - lengths[i] - prev_pos
+        else:
+            if prev >= 0:
+                fronts.append(prev)
+            rears.append(i)
+        prev, prev_key, prev_pos = i, k, p
+    if prev >= 0:
+        fronts.append(prev)
+    return leader, headway, fronts, rears
+
+
+def followers_small(leader: list[int], headway: list[float]) -> tuple[list[int], list[float]]:
+    """``followers_of`` (:mod:`flowrun.kernel.open_road`) on lists: of the cars whose leader
+    a car is, the one with the smallest headway (the lower row on a tie; a NaN headway only
+    where all are NaN, as numpy's sort puts NaN last)."""
+    n = len(leader)
+    follower, tailway = [-1] * n, [_INF] * n
+    for i, lead in enumerate(leader):
+        if lead >= 0:
+            h, t = headway[i], tailway[lead]
+            if follower[lead] < 0 or h < t or (t != t and h == h):
+                follower[lead], tailway[lead] = i, h
+    return follower, tailway
+
+
 @dataclass(eq=False)
 class Neighbours:
     """Who follows whom, and the gaps and speeds around every car.

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from flowrun.kernel.following import leaders_by_lane
+from flowrun.kernel.following import SMALL, followers_small, leaders_by_lane, leaders_small
 from flowrun.kernel.lane_graph import LaneGraph
 from flowrun.kernel.population import Population
 from flowrun.types import FloatArray, IntArray
@@ -33,6 +33,8 @@ from flowrun.types import FloatArray, IntArray
 LOOKAHEAD = 500.0
 #: At most this many lanes are walked through before SUMO is asked.
 MAX_HOPS = 4
+#: At most this many (car, lane) answers of the route look-up are kept.
+ROUTE_CACHE = 100_000
 
 Neighbour = Callable[[str, float], Any]
 Found = tuple[int, float] | None  # (row, gap) or no neighbour
@@ -56,6 +58,8 @@ class Following:
         self._get_leader = get_leader
         self.graph = graph
         self._edge_pos = edge_pos or {}
+        #: (car, lane key) -> (the car's route then, :meth:`_route_next`'s answer)
+        self._next_of: dict[tuple[str, int], tuple[tuple[str, ...] | None, int]] = {}
 
     @classmethod
     def of(cls, api: Any, graph: LaneGraph | None = None,
@@ -82,18 +86,25 @@ class Following:
             routes: each car's route by id (lets the lane graph answer; SUMO otherwise).
         """
         lengths, min_gaps, ids = pop.lengths, pop.min_gaps, pop.ids
-        leader, _, headway, fronts, rears = leaders_by_lane(lane_key, lane_pos, lengths)
+        keys = lane_key.tolist()
+        small = len(keys) <= SMALL
+        leader: Any
+        headway: Any
+        if small:  # lists: fewer numpy calls (a per-call cost) for few cars
+            pos_l, len_l = lane_pos.tolist(), lengths.tolist()
+            leader, headway, fronts, rears = leaders_small(keys, pos_l, len_l)
+        else:
+            leader, _, headway, front_a, rear_a = leaders_by_lane(lane_key, lane_pos, lengths)
+            fronts, rears = front_a.tolist(), rear_a.tolist()
         graph = self.graph if routes is not None else None
         walk = None
-        if graph is not None and fronts.size:
-            keys = lane_key.tolist()
-            rear_list = rears.tolist()
-            walk = _Walk(
-                graph, keys, lane_pos.tolist(), lengths.tolist(),
-                dict(zip([keys[r] for r in rear_list], rear_list, strict=True)),
-            )  # fmt: skip
+        if graph is not None and fronts:
+            if not small:
+                pos_l, len_l = lane_pos.tolist(), lengths.tolist()
+            rear_of = dict(zip([keys[r] for r in rears], rears, strict=True))
+            walk = _Walk(graph, keys, pos_l, len_l, rear_of)
         get_leader = self._get_leader
-        for r in fronts.tolist():
+        for r in fronts:
             if walk is not None and routes is not None:
                 answer = walk.ahead(r, self._route_next(ids[r], walk.key[r], routes))
                 if answer is not _ASK:
@@ -104,6 +115,10 @@ class Following:
             if found and found[0] and found[0] in pop:
                 leader[r] = pop.row(found[0])
                 headway[r] = float(found[1]) + float(min_gaps[r])
+        if small:
+            follower_l, tailway_l = followers_small(leader, headway)
+            return (np.array(leader, np.int64), np.array(follower_l, np.int64),
+                    np.array(headway, np.float64), np.array(tailway_l, np.float64))  # fmt: skip
         follower, tailway = followers_of(leader, headway)
         return leader, follower, headway, tailway
 
@@ -115,13 +130,19 @@ class Following:
         if graph.internal_l[key]:
             return -1
         route = routes.get(veh_id)
+        cached = self._next_of.get((veh_id, key))
+        if cached is not None and cached[0] is route:  # the same route object: same answer
+            return cached[1]
         edge = graph.edge_names[graph.edge_index_l[key]]
         if not route or edge not in route:
-            return -3
-        i = route.index(edge)
-        if i == len(route) - 1:
-            return -2
-        return self._edge_pos.get(route[i + 1], -3)
+            want = -3
+        else:
+            i = route.index(edge)
+            want = -2 if i == len(route) - 1 else self._edge_pos.get(route[i + 1], -3)
+        if len(self._next_of) >= ROUTE_CACHE:  # (cars come and go: keep it bounded)
+            self._next_of.clear()
+        self._next_of[veh_id, key] = (route, want)
+        return want
 
 
 class _Ask:

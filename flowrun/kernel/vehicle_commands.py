@@ -158,7 +158,11 @@ class VehicleCommands:
         """Command accelerations (m/s^2): next-step speed will be ``v + a*dt`` (Flow's rule)."""
         if isinstance(veh_ids, str):
             veh_ids = [veh_ids]
-        accs = np.broadcast_to(np.asarray(acc, dtype=np.float64).reshape(-1), (len(veh_ids),))
+        flat = np.asarray(acc, dtype=np.float64).reshape(-1)
+        if flat.size == len(veh_ids):  # (broadcast_to costs more than the common case)
+            accs: Any = flat.tolist()
+        else:
+            accs = np.broadcast_to(flat, (len(veh_ids),))
         for vid, a in zip(veh_ids, accs, strict=True):
             self.accel_cmd[self.table.row(vid)] = a
 
