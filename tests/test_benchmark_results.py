@@ -57,3 +57,6 @@ def test_result_files_make_the_table(tmp_path: Path) -> None:
     assert cells[3] == "PPO: 13.1 ± 6.4"  # mean of 13.6 and 12.6, t(0.975, 1) * 0.707 / 1.414
     assert cells[4] == "0, 1" and cells[5] == ">= 13.0 m/s: 1 of 2" and cells[6] == "30"
     assert cells[7] == "7.39 ± 0.55" and cells[8] == "TRPO 14.95 ± 0.12"
+    stopped = {**records[1], "train_status": "interrupted", "timesteps": 1_344_002,
+               "recipe": {"total_timesteps": 2_100_000}}  # fmt: skip
+    assert "| 0, 1 (stopped at 1.34M of 2.1M steps) |" in markdown_table([records[0], stopped])

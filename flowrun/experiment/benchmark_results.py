@@ -187,13 +187,22 @@ def table_rows(records: Sequence[Mapping[str, Any]]) -> list[list[str]]:
             f"{recs[0]['metric']} ({recs[0]['unit']})",
             _fmt(b_mean),
             f"{algo}: {learned}",
-            ", ".join(str(r["train_seed"]) for r in recs),
+            ", ".join(_seed_text(r) for r in recs),
             "–" if target is None else f"{target.text}: {met} of {len(recs)}",
             f"{max(walls):.0f}" if walls else "–",
             paper[0],
             paper[1],
         ])
     return rows
+
+
+def _seed_text(rec: Mapping[str, Any]) -> str:
+    """``0``, or ``0 (stopped at 1.34M of 2.1M steps)`` for a training that did not finish."""
+    if rec.get("train_status") in (None, "complete"):
+        return str(rec["train_seed"])
+    total = (rec.get("recipe") or {}).get("total_timesteps")
+    of = f" of {total / 1e6:.3g}M" if isinstance(total, int | float) else ""
+    return f"{rec['train_seed']} (stopped at {(rec.get('timesteps') or 0) / 1e6:.3g}M{of} steps)"
 
 
 TABLE_HEADER = [
