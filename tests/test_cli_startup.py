@@ -48,6 +48,14 @@ def test_list_envs_imports_no_env_class_nor_the_kernel() -> None:
     assert "flowrun.recording" not in loaded
 
 
+def test_validate_without_train_imports_no_kernel_nor_recording() -> None:
+    loaded = modules_after("validate", "configs/sugiyama.yaml")
+    assert "flowrun.envs.base" in loaded  # the env class is checked ...
+    assert "flowrun.kernel.kernel" not in loaded  # ... without the kernel it runs on
+    assert "flowrun.recording" not in loaded
+    assert "flowrun.envs.frames" not in loaded
+
+
 def test_env_names_are_the_classes_names() -> None:
     from flowrun.envs.registry import ALIAS_NAMES, ENV_NAMES, env_classes, resolve_env_class
 

@@ -18,7 +18,7 @@ from abc import ABCMeta, abstractmethod
 from collections import deque
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import gymnasium
 import numpy as np
@@ -27,8 +27,6 @@ from flowrun.config.params import EnvParams, SumoParams
 from flowrun.config.validate import check_params
 from flowrun.controllers.drivers import FlowStyleDriver, GroupRouters, bind_per_vehicle_groups
 from flowrun.controllers.per_vehicle import PerVehicleGroup
-from flowrun.envs.frames import StepRecord, complete_frames, step_record
-from flowrun.envs.render import EnvPainter
 from flowrun.envs.spaces import ActionClipper
 from flowrun.envs.vehicles import (
     FlowControllers,
@@ -37,13 +35,14 @@ from flowrun.envs.vehicles import (
     build_table,
 )
 from flowrun.errors import ConfigError, MissingParameterError
-from flowrun.kernel import Kernel
-from flowrun.kernel.geometry import RingPlacement
-from flowrun.kernel.network import NetworkKernel
-from flowrun.kernel.ring_reader import ring_fast_path
-from flowrun.kernel.sumo import gui_available
 from flowrun.networks.base import Network
 from flowrun.suggest import one_edit_apart
+
+if TYPE_CHECKING:  # the kernel, frames and painter are imported where an env starts
+    from flowrun.envs.frames import StepRecord
+    from flowrun.envs.render import EnvPainter
+    from flowrun.kernel import Kernel
+    from flowrun.kernel.geometry import RingPlacement
 
 log = logging.getLogger(__name__)
 #: luminance weights of R, G, B (ITU-R BT.601): the grey of Flow's gray/dgray render modes
@@ -141,11 +140,7 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         self.work_dir = Path(tempfile.mkdtemp(prefix="flowrun-")) if work_dir is None else work_dir
         if isinstance(sim_params.render, str) and render_mode is None:
             self.render_mode = "rgb_array"  # Flow's frame modes (render="drgb"): env.render()
-        gui = sim_params.render is True and gui_available()
-        if sim_params.render is True and not gui:
-            log.warning("render=True but no display or sumo-gui here: running headless")
-        self.k = Kernel(sim_params, self.work_dir, gui=gui)
-        self.k.network = NetworkKernel(network.spec, network=network)  # Flow: before reset
+        self.k = self._make_kernel(network)
         self.controls: list[GroupControl] = build_controllers(network.vehicles)
         bind_per_vehicle_groups(self.controls, network.vehicles)  # Flow-style get_accel(env)
         self._flow_style = FlowStyleDriver(network.vehicles)
@@ -170,6 +165,19 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         self.rl_queue: deque[str] = deque()
         self.rl_veh: list[str] = []
         self._queue_key: tuple[Any, int] | None = None
+
+    def _make_kernel(self, network: Network) -> Kernel:
+        """The kernel of this env (SUMO starts at the first reset), with the network's."""
+        from flowrun.kernel import Kernel
+        from flowrun.kernel.network import NetworkKernel
+        from flowrun.kernel.sumo import gui_available
+
+        gui = self.sim_params.render is True and gui_available()
+        if self.sim_params.render is True and not gui:
+            log.warning("render=True but no display or sumo-gui here: running headless")
+        kernel = Kernel(self.sim_params, self.work_dir, gui=gui)
+        kernel.network = NetworkKernel(network.spec, network=network)  # Flow: before reset
+        return kernel
 
     # ------------------------------------------------------------------ Flow's hooks
     @property
@@ -250,6 +258,8 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         # Recording on a ring: edges, lane positions, x/y (from the lane shapes, not a getter
         # per car and step) and realised accelerations of the logged frames are derived for
         # a whole batch of steps at once (take_records).
+        from flowrun.kernel.ring_reader import ring_fast_path
+
         closed = ring_fast_path(self.network.spec, table)
         self.k.reset(
             self.network,
@@ -390,6 +400,8 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
 
     def take_records(self) -> list[StepRecord]:
         """Hand over the queued step records (frames completed) and start a new queue."""
+        from flowrun.envs.frames import complete_frames
+
         records, self.records = self.records, []
         if self._placement is not None:
             complete_frames(records, self._placement, self.k.vehicle.dt)
@@ -398,6 +410,8 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
     def _emit_frame(self) -> None:
         """Queue this simulation step's record (and frame); ``step`` fills in the reward."""
         if self.record_frames or self.collect_stats:
+            from flowrun.envs.frames import step_record
+
             step = self.k.simulation.step_count
             deferred = self._placement is not None
             self.records.append(step_record(self.k, step, self.record_frames, deferred))
@@ -409,6 +423,8 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
         if self.render_mode != "rgb_array" or (self._needs_reset and not self.k.started):
             return None
         if self._painter is None:
+            from flowrun.envs.render import EnvPainter
+
             self._painter = EnvPainter()
         frame = self._painter(self.k)
         if self.sim_params.render in ("gray", "dgray"):  # Flow's grey modes: luminance
