@@ -44,6 +44,9 @@ def print_breakdown(run_dir: Path) -> None:
         share = 100 * s / total if total else 0.0
         print(f"| {label} | {s:.1f} | {share:.1f} % | {1e6 * s / max(steps, 1):.0f} |")
     print(f"| total | {total:.1f} | 100 % | {1e6 * total / max(steps, 1):.0f} |")
+    policy = timing.get("worker_policy_s", 0.0)
+    if policy:
+        print(f"(of the env stepping, {policy:.1f} s was the policy acting in the env processes)")
     history = EvalHistory.load(run_dir / EVAL_LOG / EVALUATIONS)
     if history.timesteps:
         n = len(history.timesteps)
