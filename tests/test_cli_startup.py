@@ -60,6 +60,7 @@ def test_env_names_are_the_classes_names() -> None:
     from flowrun.envs.registry import ALIAS_NAMES, ENV_NAMES, env_classes, resolve_env_class
 
     assert [c.__name__ for c in env_classes()] == list(ENV_NAMES)
+    assert [resolve_env_class(name) for name in ENV_NAMES] == list(env_classes())
     for alias, name in ALIAS_NAMES.items():
         assert resolve_env_class(alias).__name__ == name
 

@@ -36,7 +36,7 @@ INSTALL_HINT = "pip install 'flowrun[multiagent]'  (or: pip install pettingzoo==
 
 
 #: The names of flowrun's own environment classes (each registered under its class name),
-#: listed without importing the classes; ``_builtin`` imports them.
+#: listed without importing the classes (``env_classes`` imports them).
 ENV_NAMES: tuple[str, ...] = (
     "AccelEnv",
     "WaveAttenuationEnv",
@@ -57,44 +57,46 @@ ALIAS_NAMES: dict[str, str] = {"DesiredVelocityEnv": "BottleneckDesiredVelocityE
 
 
 def env_classes() -> tuple[type[Env], ...]:
-    """flowrun's own environment classes, in the order of :data:`ENV_NAMES` (imported here,
-    so that listing the names imports none of them)."""
-    from flowrun.envs.bottleneck import (
-        BottleneckAccelEnv,
-        BottleneckDesiredVelocityEnv,
-        BottleneckEnv,
-    )
-    from flowrun.envs.merge import MergePOEnv
-    from flowrun.envs.ring.accel import AccelEnv
-    from flowrun.envs.ring.lane_change import LaneChangeAccelEnv, LaneChangeAccelPOEnv
-    from flowrun.envs.ring.wave_attenuation import WaveAttenuationEnv, WaveAttenuationPOEnv
-    from flowrun.envs.test import TestEnv
-    from flowrun.envs.traffic_light_grid import (
-        TrafficLightGridBenchmarkEnv,
-        TrafficLightGridEnv,
-        TrafficLightGridPOEnv,
-    )
-
-    return (
-        AccelEnv,
-        WaveAttenuationEnv,
-        WaveAttenuationPOEnv,
-        LaneChangeAccelEnv,
-        LaneChangeAccelPOEnv,
-        MergePOEnv,
-        BottleneckEnv,
-        BottleneckAccelEnv,
-        BottleneckDesiredVelocityEnv,
-        TestEnv,
-        TrafficLightGridEnv,
-        TrafficLightGridPOEnv,
-        TrafficLightGridBenchmarkEnv,
-    )
+    """flowrun's own environment classes, in the order of :data:`ENV_NAMES`."""
+    return tuple(_builtin_class(name) for name in ENV_NAMES)
 
 
-def _builtin() -> dict[str, type[Env]]:
-    classes = {c.__name__: c for c in env_classes()}
-    return classes | {alias: classes[name] for alias, name in ALIAS_NAMES.items()}
+def _builtin_class(name: str) -> type[Env]:
+    """A built-in env class by name or alias, importing only its module (listing the
+    names imports none)."""
+    name = ALIAS_NAMES.get(name, name)
+    cls: type[Env] = getattr(_env_module(name), name)
+    return cls
+
+
+def _env_module(name: str) -> ModuleType:
+    if name.startswith("Bottleneck"):
+        from flowrun.envs import bottleneck
+
+        return bottleneck
+    if name.startswith("TrafficLightGrid"):
+        from flowrun.envs import traffic_light_grid
+
+        return traffic_light_grid
+    if name.startswith("WaveAttenuation"):
+        from flowrun.envs.ring import wave_attenuation
+
+        return wave_attenuation
+    if name.startswith("LaneChange"):
+        from flowrun.envs.ring import lane_change
+
+        return lane_change
+    if name == "MergePOEnv":
+        from flowrun.envs import merge
+
+        return merge
+    if name == "TestEnv":
+        from flowrun.envs import test
+
+        return test
+    from flowrun.envs.ring import accel
+
+    return accel
 
 
 def env_names() -> list[str]:
@@ -147,7 +149,7 @@ def resolve_env_class(name: str | None, search_dir: str | Path | None = None) ->
                 + ", or an import path 'package.module:Class'",
                 path="env.class",
             )
-        return _builtin()[name]
+        return _builtin_class(name)
     module_name, _, attr = name.partition(":")
     folder = None if search_dir is None else Path(search_dir)
     module = import_near(module_name, name, folder, "environment", "env.class")
