@@ -289,6 +289,17 @@ def test_highway_reward_is_per_agent_as_flow(tmp_path: Path) -> None:
             assert rew[a] == pytest.approx(max(r_v + 0.1 * penalty, 0.0))
 
 
+def test_highway_marks_each_agents_leader_and_follower_observed(tmp_path: Path) -> None:
+    with env_of("highway", tmp=tmp_path) as env:
+        env.reset(seed=0)
+        for _ in range(40):
+            env.step({a: np.array([0.0]) for a in env.agents})
+        vk = env.k.vehicle
+        neighbours = {n for a in env.agents for n in (vk.get_leader(a), vk.get_follower(a)) if n}
+        assert neighbours  # the step's own marks, read back through Flow's getter
+        assert neighbours <= set(vk.get_observed_ids())
+
+
 # ------------------------------------------------------------------ Flow's Python API
 def test_flow_params_with_a_multiagent_env_class_build_the_env() -> None:
     from flowrun.controllers import ContinuousRouter, IDMController, RLController

@@ -263,6 +263,15 @@ class MultiAgentEnv(Env, ParallelEnv[str, Obs, Action]):
     def _format_obs(self, obs: Any) -> Any:
         return obs  # observations are dicts; formatted per agent by ``_obs``
 
+    def observe_agents_neighbours(self) -> None:
+        """Mark each agent's leader and follower observed (Flow's ``additional_command`` of the
+        highway and I-210 envs)."""
+        vk = self.k.vehicle
+        for rl_id in self.agents:
+            for other in (vk.get_leader(rl_id), vk.get_follower(rl_id)):
+                if other:
+                    vk.set_observed(other)
+
     def state(self) -> npt.NDArray[np.float32]:
         """Not provided: the global state is the whole traffic (see the kernel's getters)."""
         raise NotImplementedError("flowrun's multi-agent envs have no global state() array")

@@ -71,11 +71,7 @@ class MultiAgentHighwayPOEnv(NeighbourAgentsEnv):
 
     def additional_command(self) -> None:
         """Flow's: mark each agent's leader and follower observed."""
-        vk = self.k.vehicle
-        for rl_id in self.agents:
-            for other in (vk.get_leader(rl_id), vk.get_follower(rl_id)):
-                if other:
-                    vk.set_observed(other)
+        self.observe_agents_neighbours()
 
     def get_state(self) -> dict[str, Any]:
         """The neighbour 5-vector of each agent."""
