@@ -63,7 +63,7 @@ def test_all_benchmarks_run_their_baselines_and_give_one_finite_row_each(tmp_pat
 def test_train_adds_the_trained_policys_score(tmp_path: Path) -> None:
     pytest.importorskip("stable_baselines3")
     tiny = ["env.horizon=10", "train.total_timesteps=20", "train.n_envs=1",
-            "train.hyperparams.n_steps=10", "train.hyperparams.batch_size=10",
+            "train.hyperparams.n_delta=1", "train.hyperparams.n_top=1",
             "train.eval_freq=0", "train.checkpoint_freq=0", "train.eval_episodes=1"]  # fmt: skip
     sets = [arg for item in tiny for arg in ("--set", item)]
     result = run(["figureeight0", "--train", "--seeds", "1", *sets, "--out", str(tmp_path)])
