@@ -33,7 +33,9 @@ class ReplaySummary:
         versions: the ``*_version`` metadata entries.
         first_time: first logged simulation time, s.
         last_time: last logged simulation time, s.
-        duration_s: simulated time covered by the logged steps, s.
+        duration_s: simulated time covered by the logged steps (one step interval per logged
+            step; printed as "time covered", not a "duration", which is the clock at the last
+            step in metrics.json), s.
         logged_steps: number of logged steps read.
         sim_steps: simulation steps spanned (last - first + 1).
         vehicles_by_type: distinct vehicle ids seen, per type.
@@ -210,7 +212,7 @@ def summary_rows(s: ReplaySummary) -> dict[str, str]:
         rows[key.removesuffix("_version") + " version"] = value
     rows.update(
         {
-            "simulated duration": _num(s.duration_s, " s", 1),
+            "time covered": _num(s.duration_s, " s", 1),
             "time range": f"{_num(s.first_time, '', 1)} - {_num(s.last_time, ' s', 1)}",
             "logged steps": str(s.logged_steps),
             "simulation steps": str(s.sim_steps),
@@ -243,7 +245,7 @@ _NUMERIC = {
     "min speed": "min_speed",
     "max speed": "max_speed",
     "speed std across vehicles": "speed_std",
-    "simulated duration": "duration_s",
+    "time covered": "duration_s",
     "collisions": "collisions",
     "teleports": "teleports",
     "return": "episode_return",
