@@ -230,7 +230,7 @@ def summary_rows(s: ReplaySummary) -> dict[str, str]:
     if s.open_network:
         rows["vehicles entered"] = str(s.departed)
         rows["vehicles left"] = str(s.arrived)
-        rows["outflow"] = _num(s.outflow, " veh/h", 0)
+        rows["outflow over the log"] = _num(s.outflow, " veh/h", 0)
     if s.lane_changes:
         rows["lane changes"] = str(s.lane_changes)
     if s.salvaged:
@@ -251,7 +251,7 @@ _NUMERIC = {
     "return": "episode_return",
     "vehicles entered": "departed",
     "vehicles left": "arrived",
-    "outflow": "outflow",
+    "outflow over the log": "outflow",
     "lane changes": "lane_changes",
 }
 
