@@ -79,9 +79,7 @@ OUT_OF_SCOPE: dict[tuple[str, str], str] = {
 #: Missing today (each a piece of work, not a choice).
 #: miles_per_gallon: needs each car's fuel rate (SUMO's getFuelConsumption), which the kernel
 #: does not read yet.
-NOT_YET: dict[str, tuple[str, ...]] = {
-    "flow.core.rewards": ("miles_per_gallon",),
-}  # fmt: skip
+NOT_YET: dict[str, tuple[str, ...]] = {}
 
 
 def flowrun_module(flow_module: str) -> object | None:

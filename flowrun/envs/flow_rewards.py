@@ -196,12 +196,32 @@ def miles_per_megajoule(env: Any, veh_ids: Any = None, gain: float = 0.001) -> f
     return mpj / 1609.0 * 1e6 * gain
 
 
+def miles_per_gallon(env: Any, veh_ids: Any = None, gain: float = 0.001) -> float:
+    """Mean of ``speed / fuel`` over cars burning fuel (gallons/s > 0, speed >= 0), in miles
+    per gallon (1 mile = 1609 m), times ``gain``; 0 when no car burns fuel."""
+    if veh_ids is None:
+        veh_ids = env.k.vehicle.get_ids()
+    elif not isinstance(veh_ids, list):
+        veh_ids = [veh_ids]
+    mpg, counter = 0.0, 0
+    for veh_id in veh_ids:
+        speed = float(env.k.vehicle.get_speed(veh_id))
+        gallons_per_s = float(env.k.vehicle.get_fuel_consumption(veh_id))
+        if gallons_per_s > 0 and speed >= 0.0:
+            counter += 1
+            mpg += speed / gallons_per_s
+    if counter:
+        mpg /= counter
+    return mpg / 1609.0 * gain
+
+
 __all__ = [
     "average_velocity",
     "avg_delay_specified_vehicles",
     "boolean_action_penalty",
     "desired_velocity",
     "energy_consumption",
+    "miles_per_gallon",
     "miles_per_megajoule",
     "min_delay",
     "min_delay_unscaled",

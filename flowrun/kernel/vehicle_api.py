@@ -1,4 +1,4 @@
-"""Flow's ``k.vehicle`` getters, served from the per-step snapshot (no SUMO call).
+"""Flow's ``k.vehicle`` getters, served from the per-step snapshot (a few ask SUMO on demand).
 
 A mixin of :class:`~flowrun.kernel.vehicle.VehicleKernel`: it reads the kernel's compact
 per-step arrays and its :class:`~flowrun.kernel.population.Population`. Unknown vehicle ids
@@ -29,6 +29,11 @@ if TYPE_CHECKING:
 
 #: Flow's value for "no such vehicle" in numeric getters.
 ERROR = FLOW_ERROR
+
+#: Density of gasoline, g per litre, used to turn SUMO's fuel mass into volume.
+GASOLINE_G_PER_L = 745.0
+#: Milligrams of gasoline in one US gallon (3.785411784 l).
+MG_PER_GALLON = GASOLINE_G_PER_L * 1000.0 * 3.785411784
 
 #: Flow's vehicle colours (red, green, blue).
 RED, CYAN, WHITE = (255, 0, 0), (0, 255, 255), (255, 255, 255)
@@ -202,6 +207,21 @@ class FlowVehicleGetters:
     def get_speed(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
         """Speed in m/s (a list for a list of ids; ``error`` for an unknown id)."""
         return self._get(self.state.speed, veh_id, error)
+
+    def get_fuel_consumption(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
+        """Fuel consumption in US gallons/s over the last step, asked of SUMO now (no per-step
+        cost); a list for a list of ids, ``error`` for an unknown id.
+
+        SUMO 1.28 gives mg/s (Flow's kernel multiplied it as ml/s); this divides by
+        :data:`GASOLINE_G_PER_L` (745 g of gasoline per litre) and 3.785411784 l per gallon,
+        so Flow's ``miles_per_gallon`` gets the gallons it expects.
+        """
+        if not isinstance(veh_id, str):
+            return [self.get_fuel_consumption(v, error) for v in veh_id]
+        if veh_id not in self.table or veh_id in self._removed():
+            return error
+        mg_per_s = float(self.api.vehicle.getFuelConsumption(veh_id))
+        return mg_per_s / MG_PER_GALLON
 
     def get_previous_speed(self, veh_id: str | Sequence[str], error: float = ERROR) -> Any:
         """Speed at the step before, m/s."""
