@@ -10,20 +10,28 @@ and :attr:`McapLog.damage` says what was lost (a warning is logged for each dama
 from __future__ import annotations
 
 import logging
-import math
 import os
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
-from typing import IO, Any, NamedTuple
+from typing import IO, Any
 
-from mcap.records import Channel, Message, Schema
+from mcap.records import Channel, Schema
 
 from flowrun.errors import RecordingError
 from flowrun.recording import mcap_read, mcap_records, schema
+from flowrun.recording.chunks import (
+    Chunk,
+    MessageTriple,
+    bound_ns,
+    chunk_messages,
+    default_channels,
+    load_chunk,
+    on_topics,
+    overlapping,
+)
 from flowrun.recording.damage import DamageReport, Loss
 from flowrun.recording.frames import SignalFrame, StepStats, VehicleFrame
-from flowrun.recording.mcap_file import OP_CHANNEL, OP_MESSAGE, OP_SCHEMA
 from flowrun.recording.signals import decode_signals
 from flowrun.recording.writer import METADATA_NAME, PROFILE
 
@@ -31,53 +39,11 @@ log = logging.getLogger(__name__)
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 
-MessageTriple = tuple[Schema | None, Channel, Message]
-
-
-class _Chunk(NamedTuple):
-    """A verified chunk: its records, their ``(opcode, start, end)``, and the schemas and
-    channels it holds (the mcap library's writer puts them in chunks)."""
-
-    records: bytes
-    spans: list[tuple[int, int, int]]
-    schemas: list[Schema]
-    channels: list[Channel]
-
 
 def _mib(n: int) -> str:
     if n < 2**20:
         return f"{n / 1024:.1f} KiB"
     return f"{n / 2**20:.1f} MiB"
-
-
-def _bound_ns(time_s: float | None, what: str) -> int | None:
-    """A time bound in s as ns, clamped to the range log times can have (-1 .. 2**64).
-
-    Raises:
-        RecordingError: the bound is NaN.
-    """
-    if time_s is None:
-        return None
-    if math.isnan(time_s):
-        raise RecordingError(f"the {what} time to read is NaN; give a number of seconds")
-    return round(max(-1.0, min(float(time_s) * 1e9, 2.0**64)))
-
-
-def _default_channels() -> tuple[dict[int, Schema], dict[int, Channel]]:
-    """The schemas/channels :class:`~flowrun.recording.McapRecorder` always registers first
-    (vehicles = 1, stats = 2): used when damage hid a flowrun log's own records."""
-    data = schema.schema_data()
-    schemas = {
-        1: Schema(id=1, name=schema.VEHICLES_TYPE, encoding=schema.ENCODING, data=data),
-        2: Schema(id=2, name=schema.STATS_TYPE, encoding=schema.ENCODING, data=data),
-    }
-    channels = {
-        cid: Channel(
-            id=cid, schema_id=cid, topic=topic, message_encoding=schema.ENCODING, metadata={}
-        )
-        for cid, topic in ((1, schema.VEHICLES_TOPIC), (2, schema.STATS_TOPIC))
-    }
-    return schemas, channels
 
 
 class McapLog:
@@ -152,7 +118,7 @@ class McapLog:
             x.part == "records" for x in self.damage.losses
         )
         if (recorder or header_lost) and self.damage:
-            schemas, channels = _default_channels()
+            schemas, channels = default_channels()
             self._schemas.update(schemas)
             self._channels.update(channels)
             self.damage.add(
@@ -190,39 +156,28 @@ class McapLog:
                 f"{schema.ENCODING!r} {schema.VEHICLES_TYPE!r}"
             )
 
-    def _learn(self, chunk: _Chunk) -> None:
+    def _learn(self, chunk: Chunk) -> None:
         """Keep the schemas and channels a chunk carries (the summary may have lost them)."""
         for sch in chunk.schemas:
             self._schemas.setdefault(sch.id, sch)
         for ch in chunk.channels:
             self._channels.setdefault(ch.id, ch)
 
-    def _chunk(self, f: IO[bytes], ref: mcap_records.ChunkRef) -> _Chunk | None:
+    def _chunk(self, f: IO[bytes], ref: mcap_records.ChunkRef) -> Chunk | None:
         """A chunk's verified records, or ``None`` (recorded in :attr:`damage`, warned once)."""
         if ref.offset in self._lost_offsets:
             return None
         return self._settle(f, ref, self._load(f, ref))
 
-    def _load(self, f: IO[bytes], ref: mcap_records.ChunkRef) -> _Chunk | Exception:
+    def _load(self, f: IO[bytes], ref: mcap_records.ChunkRef) -> Chunk | Exception:
         """Read, decompress, check and split a chunk (no state changes: runs in a thread)."""
-        try:
-            records = mcap_records.chunk_records(f, ref, self.file_bytes)
-            spans = mcap_records.split_records(records)
-            schemas = [
-                mcap_records.parse_schema(records[a:b]) for op, a, b in spans if op == OP_SCHEMA
-            ]
-            channels = [
-                mcap_records.parse_channel(records[a:b]) for op, a, b in spans if op == OP_CHANNEL
-            ]
-            return _Chunk(records, spans, schemas, channels)
-        except (mcap_records.BadRecord, OSError, MemoryError) as err:
-            return err
+        return load_chunk(f, ref, self.file_bytes)
 
     def _settle(
-        self, f: IO[bytes], ref: mcap_records.ChunkRef, loaded: _Chunk | Exception
-    ) -> _Chunk | None:
+        self, f: IO[bytes], ref: mcap_records.ChunkRef, loaded: Chunk | Exception
+    ) -> Chunk | None:
         """The loaded chunk, or ``None`` after recording why it is lost."""
-        if isinstance(loaded, _Chunk):
+        if isinstance(loaded, Chunk):
             return loaded
         self._lost_offsets.add(ref.offset)
         vehicles = self._channel_id(schema.VEHICLES_TOPIC)
@@ -289,23 +244,11 @@ class McapLog:
         """Raw ``(schema, channel, message)`` triples in log-time order, ``start_s``-``end_s``
         inclusive, from the chunks that overlap the range. A damaged chunk is skipped (and
         added to :attr:`damage`); the others are read."""
-        start_ns, end_ns = _bound_ns(start_s, "start"), _bound_ns(end_s, "end")
+        start_ns, end_ns = bound_ns(start_s, "start"), bound_ns(end_s, "end")
         if start_ns is not None and end_ns is not None and end_ns < start_ns:
             return
         wanted = None if topics is None else set(topics)
-        unpack, head = mcap_records.message_fields, mcap_records.MESSAGE_HEAD
-        refs = [
-            ref
-            for ref in self._st.chunks
-            if ref.offset not in self._lost_offsets
-            and not (
-                ref.times_trusted
-                and (
-                    (start_ns is not None and ref.end_ns < start_ns)
-                    or (end_ns is not None and ref.start_ns > end_ns)
-                )
-            )
-        ]
+        refs = overlapping(self._st.chunks, self._lost_offsets, start_ns, end_ns)
         # One worker reads (with its own file handle), decompresses and CRC-checks the next
         # chunk while this one's messages are used (zstd and zlib release the GIL); nothing
         # leaves unchecked.
@@ -324,27 +267,8 @@ class McapLog:
                 if chunk is None:
                     continue
                 self._learn(chunk)
-                keep = self._wanted_channels(wanted)
-                records = chunk.records
-                for opcode, start, end in chunk.spans:
-                    if opcode != OP_MESSAGE:
-                        continue
-                    channel_id, sequence, log_time, publish_time = unpack(records, start)
-                    channel = keep.get(channel_id)
-                    if channel is None:
-                        continue
-                    if (start_ns is not None and log_time < start_ns) or (
-                        end_ns is not None and log_time > end_ns
-                    ):
-                        continue
-                    msg = Message(
-                        channel_id=channel_id,
-                        sequence=sequence,
-                        log_time=log_time,
-                        publish_time=publish_time,
-                        data=records[start + head : end],
-                    )
-                    yield self._schemas.get(channel.schema_id), channel, msg
+                keep = on_topics(self._channels, wanted)
+                yield from chunk_messages(chunk, keep, self._schemas, start_ns, end_ns)
 
     def verify(self) -> DamageReport:
         """Read every chunk (checking its CRC) and the data section's CRC where the writer
@@ -371,11 +295,6 @@ class McapLog:
         )
         if self.damage.add(loss):
             log.warning("%s: %s", self.path, loss.describe())
-
-    def _wanted_channels(self, topics: set[str] | None) -> dict[int, Channel]:
-        return {
-            cid: ch for cid, ch in self._channels.items() if topics is None or ch.topic in topics
-        }
 
     def vehicle_messages(
         self, start_s: float | None = None, end_s: float | None = None
