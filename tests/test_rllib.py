@@ -1,7 +1,8 @@
 """RLlib training (``train.backend: rllib``), real and short: PPO on the ring with 2 env
 runners and on the multi-agent traffic-light grid, each for 2 iterations on one local Ray
-instance; a checkpoint, resume continuing RLlib's iteration counter, evaluation of a checkpoint
-to MCAP logs read back; bad settings as one-line errors (no Ray needed for those)."""
+instance, and Flow's multi-ring env from its flow_params for 1; a checkpoint, resume
+continuing RLlib's iteration counter, evaluation of a checkpoint to MCAP logs read back; bad
+settings as one-line errors (no Ray needed for those)."""
 
 from __future__ import annotations
 
@@ -209,6 +210,35 @@ def test_multi_agent_grid_trains_evaluates_and_repeats(local_ray: None, tmp_path
     ]
     assert weights[0].keys() == weights[1].keys()
     assert all(np.array_equal(weights[0][k], weights[1][k]) for k in weights[0])
+
+
+def test_flows_lord_of_the_rings_trains_and_evaluates(local_ray: None, tmp_path: Path) -> None:
+    """Flow's ``MultiWaveAttenuationPOEnv`` from its flow_params: 2 rings, one AV agent on
+    each, one shared policy, one iteration of 100 env steps (2 episodes of 50)."""
+    from flowrun.loading.flow_params import from_flow_params
+    from flowrun.loading.loader import override_config
+    from tests.test_multiagent_rings import flow_params
+
+    cfg = override_config(from_flow_params(flow_params(horizon=50)).config, [
+        "train.backend=rllib", "train.total_timesteps=100", "train.num_env_runners=0",
+        "train.eval_freq=0", "train.checkpoint_freq=100",
+        "train.rllib={train_batch_size_per_learner: 100, minibatch_size: 50, num_epochs: 1}",
+    ])  # fmt: skip
+    result = train_rllib(cfg, out=tmp_path, argv=["flowrun", "train"])
+    run = result.run_dir
+    assert (result.status, result.timesteps) == ("complete", 100)
+    assert json.loads((run / "policies.json").read_text()) == {
+        "rl_0_0": "shared", "rl_1_0": "shared",
+    }  # fmt: skip
+    [progress] = _lines(run / "progress.jsonl")
+    assert (progress["agent_steps"], progress["episode_len_mean"]) == (200, 50.0)
+    # each agent earns its ring's reward, in [0, 1] per step: 2 agents x 50 steps at most
+    assert 0.0 < progress["episode_return_mean"] <= 100.0
+    evaluation = evaluate_rllib(run, episodes=1, model="final")
+    log = open_log(evaluation.logs[0])
+    assert log.frame_count == 71  # reset + 20 warm-up + 50 steps
+    assert [f.is_rl.sum() for f in log.frames()][-1] == 2
+    assert evaluation.policy[0].collisions == 0
 
 
 # ---------------------------------------------------------------- settings, no training
