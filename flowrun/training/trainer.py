@@ -11,9 +11,6 @@ the final evaluation under ``eval/``.
 from __future__ import annotations
 
 import logging
-import multiprocessing.forkserver
-import signal
-import threading
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -34,8 +31,8 @@ from flowrun.training.callbacks import (
     save_model,
 )
 from flowrun.training.deps import require
-from flowrun.training.numpy_eval import NumpyEpisodeRunner, numpy_eval_plan
-from flowrun.training.periodic_eval import EpisodeRunner, Episodes, make_periodic_eval_callback
+from flowrun.training.numpy_eval import numpy_eval_plan
+from flowrun.training.periodic_eval import Episodes, make_periodic_eval_callback
 from flowrun.training.resume import (
     keep_monitor_files,
     note_resume,
@@ -44,8 +41,15 @@ from flowrun.training.resume import (
 from flowrun.training.resume import (
     resume_config as resume_config,
 )
-from flowrun.training.timing import TrainTiming, timed_vec_env, timing_callback
-from flowrun.training.vecenv import make_vec_env, wrap_normalize
+from flowrun.training.run_parts import (
+    close_all,
+    eval_runner,
+    learn_kwargs,
+    make_model,
+    start_forkserver_shielded,
+    training_env,
+)
+from flowrun.training.timing import TrainTiming, timing_callback
 from flowrun.training.worker_rollouts import with_worker_rollouts
 
 if TYPE_CHECKING:
@@ -162,9 +166,9 @@ def train(
     model: BaseAlgorithm | None = None
     try:
         _write_train_metrics(run_dir, cfg, tc, seed, "running", done, timing, state)
-        _start_forkserver_shielded()
-        venv = _training_env(cfg, tc, seed, run_dir, state, timing)
-        model = _model(cls, cfg, tc, venv, seed, run_dir, state)
+        start_forkserver_shielded()
+        venv = training_env(cfg, tc, seed, run_dir, state, timing)
+        model = make_model(cls, cfg, tc, venv, seed, run_dir, state)
         callbacks = make_callbacks(
             tc.algorithm, run_dir / "checkpoints", tc.checkpoint_freq, progress,
             tc.total_timesteps, stop, timing,
@@ -172,12 +176,12 @@ def train(
         callbacks.append(timing_callback(timing))
         if tc.eval_freq > 0:
             baseline = time.perf_counter()
-            runner = _eval_runner(cfg, tc, seed, stop)  # runs the all-human episodes
+            runner = eval_runner(cfg, tc, seed, stop)  # runs the all-human episodes
             timing.evaluation += time.perf_counter() - baseline
             callbacks.append(make_periodic_eval_callback(
                 runner, run_dir, tc.eval_freq, BEST_MODEL, BEST_VECNORMALIZE, timing,
             ))
-        extra = _learn_kwargs(model, cfg, tc, seed, run_dir, stop)
+        extra = learn_kwargs(model, cfg, tc, seed, run_dir, stop)
         status = _learn(model, tc, callbacks, state, stop, extra)
         done = int(model.num_timesteps)
         finish = time.perf_counter()
@@ -204,7 +208,7 @@ def train(
     finally:
         done = int(model.num_timesteps) if model is not None else done
         closing = time.perf_counter()
-        _close(venv, runner)
+        close_all(venv, runner)
         timing.finish += time.perf_counter() - closing
         timing.total = time.perf_counter() - timing.started
         _write_train_metrics(run_dir, cfg, tc, seed, status, done, timing, state)
@@ -243,25 +247,6 @@ def _learn(
     return "interrupted" if stop() and model.num_timesteps < tc.total_timesteps else "complete"
 
 
-def _learn_kwargs(
-    model: BaseAlgorithm,
-    cfg: ExperimentConfig,
-    tc: TrainConfig,
-    seed: int,
-    run_dir: Path,
-    stop: StopRequested,
-) -> dict[str, Any]:
-    """ARS evaluates its candidates in ``n_envs`` worker processes of its own
-    (:mod:`flowrun.training.ars`); the other algorithms need nothing more."""
-    if tc.algorithm != "ARS":
-        return {}
-    ars = require("flowrun.training.ars")
-    kwargs: dict[str, Any] = ars.learn_kwargs(
-        model, cfg, tc.n_envs, seed, tc.normalize, run_dir / "monitor", stop
-    )
-    return kwargs
-
-
 def _save_end(model: BaseAlgorithm, run_dir: Path, tc: TrainConfig, status: str) -> None:
     """The checkpoint, and after a complete run the final model and its statistics."""
     if status == "complete":
@@ -276,111 +261,6 @@ def _save_end(model: BaseAlgorithm, run_dir: Path, tc: TrainConfig, status: str)
 def _save_interrupted(model: BaseAlgorithm | None, run_dir: Path, tc: TrainConfig) -> None:
     if model is not None:
         _save_end(model, run_dir, tc, "interrupted")
-
-
-def _start_forkserver_shielded() -> None:
-    """Start multiprocessing's fork server with SIGINT ignored.
-
-    The env subprocesses are forked from it and inherit that, so Ctrl-C in a terminal (sent
-    to the whole process group) reaches only this process, which stops at a step boundary and
-    closes the envs itself. SIGINT stays blocked here meanwhile, so a Ctrl-C in that moment is
-    delivered afterwards, not lost. SIGTERM is left alone (``multiprocessing`` ends stray
-    children with it); when it reaches the envs too, training stops as interrupted all the
-    same. No-op when the fork server already runs or outside the main thread.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        return
-    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        multiprocessing.forkserver.ensure_running()
-    finally:
-        signal.signal(signal.SIGINT, handler)
-        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
-
-
-def _training_env(
-    cfg: ExperimentConfig,
-    tc: TrainConfig,
-    seed: int,
-    run_dir: Path,
-    state: dict[str, Any] | None,
-    timing: TrainTiming,
-) -> VecEnv:
-    monitor_dir = run_dir / "monitor"
-    monitor_dir.mkdir(exist_ok=True)
-    # Resumed runs reseed differently so they do not replay the first episodes.
-    env_seed = seed if state is None else seed + int(state["timesteps"])
-    ars = tc.algorithm == "ARS"  # its workers step their own envs; this one gives the spaces
-    venv = make_vec_env(
-        cfg, 1 if ars else tc.n_envs, env_seed, monitor_dir=None if ars else monitor_dir,
-        subprocess=True, worker_rollouts=not ars,
-    )
-    venv = timed_vec_env(venv, timing)
-    if tc.normalize:
-        stats = None
-        if state is not None and state.get("vecnormalize"):
-            stats = run_dir / "checkpoints" / state["vecnormalize"]
-        venv = wrap_normalize(venv, stats, training=True, gamma=_gamma(tc), rewards=not ars)
-    return venv
-
-
-def _eval_runner(
-    cfg: ExperimentConfig, tc: TrainConfig, seed: int, stop: StopRequested
-) -> Episodes:
-    """The episodes that pick ``best_model.zip``, run in this process (on SUMO, or on the
-    numpy rings with ``train.eval_backend: numpy``).
-
-    Evaluation-mode rewards (Flow's ``env.evaluate``: the mean speed for the ring envs) and
-    the same ``eval_episodes`` reset seeds at every evaluation, so scores are comparable.
-    """
-    seeds = [seed + 10_000 + i for i in range(tc.eval_episodes)]
-    eval_cfg = replace(cfg, env=replace(cfg.env, evaluate=True))
-    runner = NumpyEpisodeRunner if tc.eval_backend == "numpy" else EpisodeRunner
-    return runner(eval_cfg, seeds, stop)
-
-
-def _gamma(tc: TrainConfig) -> float:
-    """The discount of the reward normalisation: the algorithm's ``gamma`` (SB3 default 0.99)."""
-    return float(tc.hyperparams.get("gamma", 0.99))
-
-
-def _model(
-    cls: type[BaseAlgorithm],
-    cfg: ExperimentConfig,
-    tc: TrainConfig,
-    venv: VecEnv,
-    seed: int,
-    run_dir: Path,
-    state: dict[str, Any] | None,
-) -> BaseAlgorithm:
-    action_dim = int(venv.action_space.shape[0]) if venv.action_space.shape else None
-    hyper = build_hyperparams(tc.algorithm, tc.hyperparams, action_dim)
-    torch = require("torch")
-    torch.set_num_threads(1)  # the envs need the other core(s)
-    if state is None or not state.get("model"):
-        return cls(
-            tc.policy, venv, policy_kwargs=dict(tc.policy_kwargs) or None, seed=seed,
-            tensorboard_log=str(run_dir / "tensorboard"), verbose=0, device="cpu", **hyper,
-        )
-    ckpt_dir = run_dir / "checkpoints"
-    model = cls.load(
-        ckpt_dir / state["model"], env=venv, device="cpu",
-        tensorboard_log=str(run_dir / "tensorboard"),
-    )
-    if state.get("replay_buffer") and hasattr(model, "load_replay_buffer"):
-        model.load_replay_buffer(ckpt_dir / state["replay_buffer"])
-    return model
-
-
-def _close(*envs: VecEnv | Episodes | None) -> None:
-    for env in envs:
-        if env is None:
-            continue
-        try:
-            env.close()
-        except (EOFError, BrokenPipeError, ConnectionResetError, OSError) as err:
-            log.debug("env already gone at close: %s", err)  # workers died with Ctrl-C
 
 
 def _write_train_metrics(
