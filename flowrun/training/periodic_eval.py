@@ -31,9 +31,12 @@ from flowrun.config.model import ExperimentConfig
 from flowrun.config.params import VehicleParams, is_rl
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.training.deps import require
+from flowrun.training.policy_functions import Act as Act
+from flowrun.training.policy_functions import numpy_policy as numpy_policy
+from flowrun.training.policy_functions import policy_act
+from flowrun.training.policy_functions import torch_policy as torch_policy
 
 if TYPE_CHECKING:
-    from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.callbacks import BaseCallback
 
     from flowrun.training.timing import TrainTiming
@@ -42,8 +45,6 @@ log = logging.getLogger(__name__)
 
 EVAL_LOG = "eval_log"
 EVALUATIONS = "evaluations.npz"
-# obs (1-D, already normalised) -> action; a batch of observations (rows) -> actions (rows)
-Act = Callable[[np.ndarray], np.ndarray]
 
 
 def all_human(cfg: ExperimentConfig) -> ExperimentConfig:
@@ -56,69 +57,6 @@ def all_human(cfg: ExperimentConfig) -> ExperimentConfig:
         replace(g, acceleration_controller=human) if is_rl(g) else g for g in cfg.vehicles.groups
     ]
     return replace(cfg, vehicles=VehicleParams(groups))
-
-
-def numpy_policy(policy: Any) -> Act | None:
-    """The deterministic action of an SB3 ``ActorCriticPolicy`` MLP, computed with numpy.
-
-    Returns ``None`` when the policy is not a plain one (not a flattened Box observation, not
-    Linear/Tanh/ReLU layers, a squashed or non-Gaussian action): use :func:`torch_policy`.
-    The weights are copied, so later training does not change the returned function.
-    """
-    torch = require("torch")
-    nn = torch.nn
-    distributions = require("stable_baselines3.common.distributions")
-    torch_layers = require("stable_baselines3.common.torch_layers")
-    mlp = getattr(policy, "mlp_extractor", None)
-    action_net = getattr(policy, "action_net", None)
-    if (
-        mlp is None
-        or not isinstance(action_net, nn.Linear)
-        or getattr(policy, "squash_output", True)
-        or not isinstance(policy.action_dist, distributions.DiagGaussianDistribution)
-        or not isinstance(policy.pi_features_extractor, torch_layers.FlattenExtractor)
-    ):
-        return None
-    layers: list[tuple[str, np.ndarray | None, np.ndarray | None]] = []
-    for module in [*mlp.policy_net, action_net]:
-        if isinstance(module, nn.Linear):
-            weight = module.weight.detach().cpu().numpy().astype(np.float64).T.copy()
-            bias = module.bias.detach().cpu().numpy().astype(np.float64).copy()
-            layers.append(("linear", weight, bias))
-        elif isinstance(module, nn.Tanh | nn.ReLU):
-            layers.append((type(module).__name__.lower(), None, None))
-        else:
-            return None
-    low = np.asarray(policy.action_space.low, dtype=np.float64)
-    high = np.asarray(policy.action_space.high, dtype=np.float64)
-
-    def act(obs: np.ndarray) -> np.ndarray:
-        x = np.asarray(obs, dtype=np.float64)  # one observation, or a batch (rows)
-        for kind, weight, bias in layers:
-            if kind == "linear":
-                x = x @ weight + bias  # type: ignore[operator]
-            elif kind == "tanh":
-                x = np.tanh(x)
-            else:
-                x = np.maximum(x, 0.0)
-        return np.clip(x, low, high).astype(np.float32)
-
-    return act
-
-
-def torch_policy(model: BaseAlgorithm) -> Act:
-    """SB3's own deterministic ``predict`` (any policy; slower per step)."""
-
-    def act(obs: np.ndarray) -> np.ndarray:
-        action, _ = model.predict(obs, deterministic=True)
-        return np.asarray(action)
-
-    return act
-
-
-def policy_act(model: BaseAlgorithm) -> Act:
-    """The fastest faithful deterministic policy of ``model`` (numpy copy, else SB3's)."""
-    return numpy_policy(model.policy) or torch_policy(model)
 
 
 @dataclass(frozen=True)
