@@ -27,6 +27,9 @@ from flowrun.config.params import EnvParams, SumoParams
 from flowrun.config.validate import check_params
 from flowrun.controllers.drivers import FlowStyleDriver, GroupRouters, bind_per_vehicle_groups
 from flowrun.controllers.per_vehicle import PerVehicleGroup
+from flowrun.envs.additional_params import check_additional_params as check_additional_params
+from flowrun.envs.output import GREY as GREY
+from flowrun.envs.output import EnvOutput
 from flowrun.envs.spaces import ActionClipper
 from flowrun.envs.vehicles import (
     FlowControllers,
@@ -34,9 +37,8 @@ from flowrun.envs.vehicles import (
     build_controllers,
     build_table,
 )
-from flowrun.errors import ConfigError, MissingParameterError
+from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
-from flowrun.suggest import one_edit_apart
 
 if TYPE_CHECKING:  # the kernel, frames and painter are imported where an env starts
     from flowrun.envs.frames import StepRecord
@@ -45,34 +47,9 @@ if TYPE_CHECKING:  # the kernel, frames and painter are imported where an env st
     from flowrun.kernel.geometry import RingPlacement
 
 log = logging.getLogger(__name__)
-#: luminance weights of R, G, B (ITU-R BT.601): the grey of Flow's gray/dgray render modes
-GREY = np.array([0.299, 0.587, 0.114])
 
 
-def check_additional_params(cls: type, env_params: EnvParams) -> None:
-    """Report a key one edit off a declared one (a typo: Flow's other keys are free-form),
-    then every key of ``cls.ADDITIONAL_ENV_PARAMS`` missing from ``env_params``."""
-    declared = getattr(cls, "ADDITIONAL_ENV_PARAMS", {}) or {}
-    for key in env_params.additional_params:
-        near = [k for k in declared if key not in declared and one_edit_apart(str(key), k)]
-        if near:
-            raise ConfigError(
-                f"unknown parameter of {cls.__name__} (did you mean '{near[0]}'?); keys it "
-                "does not declare are passed on as they are, but this one looks like a typo",
-                path=f"env.additional_params.{key}",
-            )
-    missing = [k for k in declared if k not in env_params.additional_params]
-    if missing:
-        keys = ", ".join(f"'{k}' (default there: {declared[k]!r})" for k in missing)
-        plural = "s" if len(missing) > 1 else ""
-        raise MissingParameterError(
-            f"missing key{plural} {keys} that {cls.__name__} declares in its "
-            f"ADDITIONAL_ENV_PARAMS; add {'them' if plural else 'it'} to env.additional_params",
-            path="env.additional_params",
-        )
-
-
-class Env(gymnasium.Env, metaclass=ABCMeta):
+class Env(EnvOutput, gymnasium.Env, metaclass=ABCMeta):
     """Base class of flowrun environments (Flow's ``flow.envs.Env``).
 
     Args:
@@ -397,39 +374,6 @@ class Env(gymnasium.Env, metaclass=ABCMeta):
             "time": self.k.simulation.time,
             "reward_terms": dict(self.reward_terms),
         }
-
-    def take_records(self) -> list[StepRecord]:
-        """Hand over the queued step records (frames completed) and start a new queue."""
-        from flowrun.envs.frames import complete_frames
-
-        records, self.records = self.records, []
-        if self._placement is not None:
-            complete_frames(records, self._placement, self.k.vehicle.dt)
-        return records
-
-    def _emit_frame(self) -> None:
-        """Queue this simulation step's record (and frame); ``step`` fills in the reward."""
-        if self.record_frames or self.collect_stats:
-            from flowrun.envs.frames import step_record
-
-            step = self.k.simulation.step_count
-            deferred = self._placement is not None
-            self.records.append(step_record(self.k, step, self.record_frames, deferred))
-
-    def render(self) -> Any:
-        """A top-down RGB picture of the traffic on its road (``render_mode="rgb_array"``:
-        lane shapes of the network, cars coloured by speed on a scale that grows with the
-        fastest car of the episode, AVs outlined, signal states), else ``None``."""
-        if self.render_mode != "rgb_array" or (self._needs_reset and not self.k.started):
-            return None
-        if self._painter is None:
-            from flowrun.envs.render import EnvPainter
-
-            self._painter = EnvPainter()
-        frame = self._painter(self.k)
-        if self.sim_params.render in ("gray", "dgray"):  # Flow's grey modes: luminance
-            frame = np.repeat((frame @ GREY).astype(np.uint8)[..., None], 3, axis=2)
-        return frame
 
     def terminate(self) -> None:
         """Flow's name for :meth:`close`."""
