@@ -8,7 +8,7 @@ envs call those formulas directly.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -177,42 +177,37 @@ def vehicle_energy_consumption(env: Any, veh_id: str, gain: float = 0.001) -> fl
 veh_energy_consumption = vehicle_energy_consumption
 
 
-def miles_per_megajoule(env: Any, veh_ids: Any = None, gain: float = 0.001) -> float:
-    """Mean of ``speed / power`` over cars with power > 0 and speed >= 0.1 m/s, in miles per
-    megajoule (1 mile = 1609 m), times ``gain``."""
+def _mean_speed_per_rate(
+    env: Any, veh_ids: Any, rate: Callable[[str], float], min_speed: float
+) -> float:
+    """Mean over cars with ``rate(car) > 0`` and speed >= ``min_speed`` of ``speed / rate``
+    (0 when no car counts); ``veh_ids`` one id, a list, or ``None`` for every car."""
     if veh_ids is None:
         veh_ids = env.k.vehicle.get_ids()
     elif not isinstance(veh_ids, list):
         veh_ids = [veh_ids]
-    mpj, counter = 0.0, 0
+    total, counter = 0.0, 0
     for veh_id in veh_ids:
         speed = float(env.k.vehicle.get_speed(veh_id))
-        power = -vehicle_energy_consumption(env, veh_id, gain=1.0)
-        if power > 0 and speed >= 0.1:
+        per_s = rate(veh_id)
+        if per_s > 0 and speed >= min_speed:
             counter += 1
-            mpj += speed / power
-    if counter:
-        mpj /= counter
-    return mpj / 1609.0 * 1e6 * gain
+            total += speed / per_s
+    return total / counter if counter else 0.0
+
+
+def miles_per_megajoule(env: Any, veh_ids: Any = None, gain: float = 0.001) -> float:
+    """Mean of ``speed / power`` over cars with power > 0 and speed >= 0.1 m/s, in miles per
+    megajoule (1 mile = 1609 m), times ``gain``."""
+    power = lambda v: -vehicle_energy_consumption(env, v, gain=1.0)  # noqa: E731
+    return _mean_speed_per_rate(env, veh_ids, power, 0.1) / 1609.0 * 1e6 * gain
 
 
 def miles_per_gallon(env: Any, veh_ids: Any = None, gain: float = 0.001) -> float:
     """Mean of ``speed / fuel`` over cars burning fuel (gallons/s > 0, speed >= 0), in miles
     per gallon (1 mile = 1609 m), times ``gain``; 0 when no car burns fuel."""
-    if veh_ids is None:
-        veh_ids = env.k.vehicle.get_ids()
-    elif not isinstance(veh_ids, list):
-        veh_ids = [veh_ids]
-    mpg, counter = 0.0, 0
-    for veh_id in veh_ids:
-        speed = float(env.k.vehicle.get_speed(veh_id))
-        gallons_per_s = float(env.k.vehicle.get_fuel_consumption(veh_id))
-        if gallons_per_s > 0 and speed >= 0.0:
-            counter += 1
-            mpg += speed / gallons_per_s
-    if counter:
-        mpg /= counter
-    return mpg / 1609.0 * gain
+    fuel = lambda v: float(env.k.vehicle.get_fuel_consumption(v))  # noqa: E731
+    return _mean_speed_per_rate(env, veh_ids, fuel, 0.0) / 1609.0 * gain
 
 
 __all__ = [
