@@ -210,27 +210,6 @@ def miles_per_gallon(env: Any, veh_ids: Any = None, gain: float = 0.001) -> floa
     return _mean_speed_per_rate(env, veh_ids, fuel, 0.0) / 1609.0 * gain
 
 
-__all__ = [
-    "average_velocity",
-    "avg_delay_specified_vehicles",
-    "boolean_action_penalty",
-    "desired_velocity",
-    "energy_consumption",
-    "miles_per_gallon",
-    "miles_per_megajoule",
-    "min_delay",
-    "min_delay_unscaled",
-    "penalize_headway_variance",
-    "penalize_near_standstill",
-    "penalize_standstill",
-    "punish_rl_lane_changes",
-    "rl_forward_progress",
-    "total_velocity",
-    "veh_energy_consumption",
-    "vehicle_energy_consumption",
-]
-
-
 def punish_small_rl_headways(
     env: Any, headway_threshold: float, penalty_gain: float = 1, penalty_exponent: float = 1
 ) -> float:
@@ -270,3 +249,28 @@ def punish_queues_in_lane(
     vk = env.k.vehicle
     count = sum(1 for v in vk.get_ids_by_edge(edge) if vk.get_lane(v) == lane)
     return -1.0 * (count**penalty_exponent) * penalty_gain
+
+
+#: Flow's ``flow.core.rewards`` names (re-exported there by :mod:`flowrun.core.rewards`)
+__all__ = [
+    "average_velocity",
+    "avg_delay_specified_vehicles",
+    "boolean_action_penalty",
+    "desired_velocity",
+    "energy_consumption",
+    "miles_per_gallon",
+    "miles_per_megajoule",
+    "min_delay",
+    "min_delay_unscaled",
+    "penalize_headway_variance",
+    "penalize_near_standstill",
+    "penalize_standstill",
+    "punish_queues_in_lane",
+    "punish_rl_lane_changes",
+    "punish_small_rl_headways",
+    "reward_rl_opening_headways",
+    "rl_forward_progress",
+    "total_velocity",
+    "veh_energy_consumption",
+    "vehicle_energy_consumption",
+]
