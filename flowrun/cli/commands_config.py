@@ -2,21 +2,24 @@
 
 from __future__ import annotations
 
-import importlib
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from flowrun.cli.common import SeedOpt, SetOpt, guarded, overrides_with_seed
+from flowrun.controllers.registry import controller_lines
+from flowrun.envs.registry import env_names
 from flowrun.errors import ConfigError
+from flowrun.networks.registry import network_lines
 from flowrun.suggest import unknown_name
 
-# ``flowrun list WHAT`` -> (module, function returning the names); imported only when asked.
-LISTS: dict[str, tuple[str, str]] = {
-    "envs": ("flowrun.envs.registry", "env_names"),
-    "networks": ("flowrun.networks.registry", "network_lines"),  # with their parameters
-    "controllers": ("flowrun.controllers.registry", "controller_lines"),  # with parameters
+# ``flowrun list WHAT`` -> the function returning its lines.
+LISTS: dict[str, Callable[[], list[str]]] = {
+    "envs": env_names,
+    "networks": network_lines,  # with their parameters
+    "controllers": controller_lines,  # with their parameters
 }
 
 
@@ -28,8 +31,7 @@ def list_names(what: str) -> list[str]:
     """
     if what not in LISTS:
         raise ConfigError(unknown_name("list", what, LISTS))
-    module, function = LISTS[what]
-    return [str(name) for name in getattr(importlib.import_module(module), function)()]
+    return LISTS[what]()
 
 
 def register(app: typer.Typer) -> None:
