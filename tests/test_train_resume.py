@@ -11,6 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
+from flowrun.errors import ConfigError
 from flowrun.loading.loader import load_config
 from flowrun.rundir.train_state import RunLock, run_state
 from flowrun.training.periodic_eval import EVAL_LOG, EVALUATIONS, EvalHistory, numpy_policy
@@ -185,3 +186,28 @@ def test_evaluation_score_is_the_worst_ring_relative_to_the_all_human_baseline()
         assert runner_.run(lambda obs: np.full(1, 0.5, np.float32), None) == coast  # same seeds
     finally:
         runner_.close()
+
+
+def test_best_by_return_ranks_by_the_mean_evaluation_return_without_a_baseline() -> None:
+    from dataclasses import replace
+
+    from flowrun.training.periodic_eval import EpisodeRunner
+
+    cfg = load_config(CONFIG, [*TINY, "env.horizon=200", "train.best_by=return"])
+    assert cfg.train is not None and cfg.train.best_by == "return"
+    runner_ = EpisodeRunner(replace(cfg, env=replace(cfg.env, evaluate=True)), [3, 4],
+                            best_by=cfg.train.best_by)
+    try:
+        assert all(np.isnan(b) for b in runner_.baseline)  # no all-human episodes played
+        coast = runner_.run(lambda obs: np.array([0.5], dtype=np.float32), None)
+        assert coast is not None
+        returns = [s.episode_return for s in coast]
+        assert returns[0] != returns[1]
+        assert runner_.score(coast) == pytest.approx(float(np.mean(returns)))
+    finally:
+        runner_.close()
+
+
+def test_an_unknown_best_by_is_refused_with_did_you_mean() -> None:
+    with pytest.raises(ConfigError, match=r"best-model score 'retrun'.*did you mean 'return'"):
+        load_config(CONFIG, [*TINY, "train.best_by=retrun"])

@@ -36,6 +36,7 @@ ALGORITHMS = ("PPO", "A2C", "SAC", "TD3", "DDPG", "TRPO", "ARS")
 SPACINGS = ("uniform", "random", "custom")
 SIM_BACKENDS = ("sumo", "numpy")
 TRAIN_BACKENDS = ("sb3", "rllib")
+BEST_BY = ("speed_ratio", "return")
 
 
 #: Largest magnitude accepted for a length, distance or position, m (1000 km).
@@ -354,6 +355,7 @@ FIELD_CHECKS: dict[tuple[type, str], Check] = {
     (TrainConfig, "eval_freq"): at_least(0),
     (TrainConfig, "eval_episodes"): at_least(1, high=1e6),
     (TrainConfig, "eval_backend"): one_of("evaluation backend", SIM_BACKENDS),
+    (TrainConfig, "best_by"): one_of("best-model score", BEST_BY),
     (TrainConfig, "checkpoint_freq"): at_least(0),
     (TrainConfig, "backend"): one_of("training backend", TRAIN_BACKENDS),
 }

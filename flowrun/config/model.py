@@ -44,6 +44,10 @@ class TrainConfig:
         eval_backend: where the periodic evaluation runs its episodes: ``sumo`` (default) or
             ``numpy`` (single-lane rings only: the numpy backend's rings, which equal SUMO's to
             1e-9 m/s, all episodes stepped together; about a fifth of the cost).
+        best_by: what picks ``best_model.zip`` among the periodic evaluations:
+            ``speed_ratio`` (default: the worst episode's last-half mean speed relative to the
+            all-human baseline of the same episode) or ``return`` (the mean evaluation-mode
+            return: a benchmark's own metric, e.g. the whole episode's mean speed).
         checkpoint_freq: save a checkpoint every this many environment steps (0 = never).
         backend: ``sb3`` (stable-baselines3, default) or ``rllib`` (Ray RLlib).
         num_env_runners: RLlib only: env runners (one process and one SUMO each); ``None``
@@ -66,6 +70,7 @@ class TrainConfig:
     eval_freq: int = 0
     eval_episodes: int = 1
     eval_backend: str = "sumo"
+    best_by: str = "speed_ratio"
     checkpoint_freq: int = 0
     backend: str = "sb3"
     num_env_runners: int | None = None

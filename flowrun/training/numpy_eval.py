@@ -55,13 +55,14 @@ class NumpyEpisodeRunner(Episodes):
         cfg: ExperimentConfig,
         seeds: Sequence[int],
         should_stop: Callable[[], bool] | None = None,
+        best_by: str = "speed_ratio",
     ) -> None:
         """Plan ``cfg`` (evaluation mode is set here) and run the all-human baseline; see
         :class:`~flowrun.training.periodic_eval.Episodes` for the other arguments."""
         from flowrun.envs.factory import env_class
         from flowrun.envs.ring.wave_attenuation import spread_lengths
 
-        super().__init__(seeds, should_stop)
+        super().__init__(seeds, should_stop, best_by)
         self._start: FastRings | None = None
         self.plan = numpy_eval_plan(cfg)
         # spread over the drawn lengths as the SUMO env's evaluation_options spreads them
@@ -69,14 +70,17 @@ class NumpyEpisodeRunner(Episodes):
         self.lengths: list[float | None] = [None] * n
         if bounds is not None and hasattr(env_class(cfg), "evaluation_options"):
             self.lengths = [float(x) for x in spread_lengths(bounds, n)]
+        self.baseline = self._baseline(cfg) if self.needs_baseline else [math.nan] * n
+
+    def _baseline(self, cfg: ExperimentConfig) -> list[float]:
+        """Last-half mean speed of each seed's all-human episode (``nan`` when unknown)."""
+        nan = [math.nan] * len(self.seeds)
         try:
             human = numpy_eval_plan(all_human(cfg))
         except ConfigError:  # no human group to copy: scores fall back to returns
-            self.baseline = [math.nan] * len(self.seeds)
-        else:
-            runs = self._play(human, None, None)  # None: asked to stop (run() gives up too)
-            nan = [math.nan] * len(self.seeds)
-            self.baseline = nan if runs is None else [r.last_half_speed for r in runs]
+            return nan
+        runs = self._play(human, None, None)  # None: asked to stop (run() gives up too)
+        return nan if runs is None else [r.last_half_speed for r in runs]
 
     def run(
         self, act: Act, normalize: Callable[[np.ndarray], np.ndarray] | None

@@ -91,16 +91,30 @@ class Episodes:
 
     baseline: list[float]
 
-    def __init__(self, seeds: Sequence[int], should_stop: Callable[[], bool] | None) -> None:
+    def __init__(
+        self,
+        seeds: Sequence[int],
+        should_stop: Callable[[], bool] | None,
+        best_by: str = "speed_ratio",
+    ) -> None:
         self.seeds = tuple(seeds)
         self.should_stop = should_stop
+        self.best_by = best_by
+
+    @property
+    def needs_baseline(self) -> bool:
+        """Whether :meth:`score` compares with the all-human episodes (``speed_ratio``)."""
+        return self.best_by == "speed_ratio"
 
     def score(self, scores: Sequence[EpisodeScore]) -> float:
-        """What picks the best model: the worst episode's last-half mean speed as a fraction of
-        the all-human baseline's on the same seed (rings of different lengths then count
-        alike, and a policy must be good on every one of them: the mean let a policy that
-        stops the AV on short rings win on its long ones). The mean return when the env
+        """What picks the best model. ``best_by: return``: the mean evaluation-mode return (a
+        benchmark's metric). ``speed_ratio``: the worst episode's last-half mean speed as a
+        fraction of the all-human baseline's on the same seed (rings of different lengths then
+        count alike, and a policy must be good on every one of them: the mean let a policy that
+        stops the AV on short rings win on its long ones); the mean return when the env
         reports no speeds."""
+        if not self.needs_baseline:
+            return float(np.mean([s.episode_return for s in scores]))
         ratios = [s.last_half_speed / b for s, b in zip(scores, self.baseline, strict=True)]
         if all(math.isfinite(r) for r in ratios) and all(b > 0 for b in self.baseline):
             return float(min(ratios))
@@ -125,13 +139,15 @@ class EpisodeRunner(Episodes):
         cfg: ExperimentConfig,
         seeds: Sequence[int],
         should_stop: Callable[[], bool] | None = None,
+        best_by: str = "speed_ratio",
     ) -> None:
         """Build the env of ``cfg`` (evaluation mode is the caller's choice); see
         :class:`Episodes` for the other arguments."""
         from flowrun.envs.factory import make_env
 
-        super().__init__(seeds, should_stop)
-        self.baseline = self._baseline(cfg)
+        super().__init__(seeds, should_stop, best_by)
+        nan = [math.nan] * len(self.seeds)
+        self.baseline = self._baseline(cfg) if self.needs_baseline else nan
         self.env = make_env(cfg)  # after the baseline's env is closed: one SUMO a process
         self.options = _spread_options(self.env, len(self.seeds))
 

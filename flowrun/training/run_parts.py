@@ -141,7 +141,7 @@ def eval_runner(
     seeds = [seed + 10_000 + i for i in range(tc.eval_episodes)]
     eval_cfg = replace(cfg, env=replace(cfg.env, evaluate=True))
     runner = NumpyEpisodeRunner if tc.eval_backend == "numpy" else EpisodeRunner
-    return runner(eval_cfg, seeds, stop)
+    return runner(eval_cfg, seeds, stop, tc.best_by)
 
 
 def close_all(*envs: VecEnv | Episodes | None) -> None:
