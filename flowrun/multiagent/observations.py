@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 
+from flowrun.envs.ring.tasks import partial_observation
 from flowrun.types import FloatArray
 
 #: Bounds of the neighbour 5-vector (speed, relative leader speed, headway, relative follower
@@ -49,3 +50,24 @@ def neighbour_obs(vk: Any, veh_id: str, max_speed: float, max_length: float) -> 
             tailway / max_length,
         ]
     )
+
+
+def leader_obs(vk: Any, agents: list[str], max_length: float) -> dict[str, FloatArray]:
+    """Each AV's view in Flow's multi-agent ring envs: the single-agent ring's
+    :func:`~flowrun.envs.ring.tasks.partial_observation` ``[v / 15, (v_lead - v) / 15,
+    headway / max_length]`` with the bumper-to-bumper headway (``get_headway``) as the gap;
+    a car alone on its ring is its own leader, with ``headway = max_length``.
+
+    Args:
+        vk: the vehicle kernel (``env.k.vehicle``).
+        agents: the AVs.
+        max_length: normaliser of the headway (the largest ring length), m.
+    """
+    obs = {}
+    for rl_id in agents:
+        lead = vk.get_leader(rl_id) or rl_id
+        headway = float(vk.get_headway(rl_id)) if lead != rl_id else max_length
+        obs[rl_id] = partial_observation(
+            float(vk.get_speed(rl_id)), float(vk.get_speed(lead)), headway, max_length
+        )
+    return obs

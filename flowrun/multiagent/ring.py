@@ -15,7 +15,7 @@ from flowrun.envs.rewards import wave_attenuation_terms
 from flowrun.envs.ring.accel import acceleration_box, desired_velocity_reward
 from flowrun.envs.ring.wave_attenuation import ring_bounds
 from flowrun.multiagent.base import MultiAgentEnv
-from flowrun.multiagent.observations import neighbour_obs
+from flowrun.multiagent.observations import leader_obs, neighbour_obs
 from flowrun.networks.base import Network
 
 WAVE_PARAMS: dict[str, Any] = {
@@ -35,9 +35,6 @@ ACCEL_PARAMS: dict[str, Any] = {
     # desired speed of all cars, m/s (the reward's target)
     "target_velocity": 20,
 }
-
-V_OBS_SCALE = 15.0  # m/s: Flow's speed normaliser of the wave-attenuation observation
-
 
 def flat_actions(rl_actions: dict[str, Any] | None) -> np.ndarray:
     """All agents' action values in one array (empty without actions)."""
@@ -90,23 +87,11 @@ class MultiAgentWaveAttenuationPOEnv(MultiAgentEnv):
         return self.initial_network.with_params(length=length)
 
     def get_state(self) -> dict[str, Any]:
-        """Speed, relative leader speed and headway of each agent, normalised."""
-        vk = self.k.vehicle
+        """Speed, relative leader speed and headway of each agent, normalised
+        (:func:`~flowrun.multiagent.observations.leader_obs`)."""
         bounds = ring_bounds(self.env_params.additional_params)
         max_length = float(bounds[1]) if bounds is not None else self.k.network.length()
-        obs = {}
-        for rl_id in self.agents:
-            lead = vk.get_leader(rl_id) or rl_id
-            speed = float(vk.get_speed(rl_id))
-            headway = float(vk.get_headway(rl_id)) if lead != rl_id else max_length
-            obs[rl_id] = np.array(
-                [
-                    speed / V_OBS_SCALE,
-                    (float(vk.get_speed(lead)) - speed) / V_OBS_SCALE,
-                    headway / max_length,
-                ]
-            )
-        return obs
+        return leader_obs(self.k.vehicle, self.agents, max_length)
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Shared speed reward minus acceleration penalty (mean speed when evaluating); 0 for

@@ -12,6 +12,7 @@ from gymnasium.spaces import Box
 
 from flowrun.envs.ring.accel import acceleration_box
 from flowrun.multiagent.base import MultiAgentEnv
+from flowrun.multiagent.observations import leader_obs
 
 RINGS_PARAMS: dict[str, Any] = {
     # maximum acceleration of the AVs, m/s^2
@@ -23,9 +24,6 @@ RINGS_PARAMS: dict[str, Any] = {
     # desired speed of the cars of each ring, m/s (the reward's target)
     "target_velocity": 4,
 }
-
-V_OBS_SCALE = 15.0  # m/s: Flow's speed normaliser
-
 
 def ring_of(edge: str) -> str:
     """The ring index in a multi-ring edge id (``top_3`` -> ``3``)."""
@@ -69,18 +67,10 @@ class MultiWaveAttenuationPOEnv(MultiAgentEnv):
         return acceleration_box(self.env_params.additional_params, per_ring)
 
     def get_state(self) -> dict[str, Any]:
-        """Speed, relative leader speed and headway of each agent, normalised."""
-        vk = self.k.vehicle
+        """Speed, relative leader speed and headway of each agent, normalised
+        (:func:`~flowrun.multiagent.observations.leader_obs`)."""
         max_length = float(self.env_params.additional_params["ring_length"][1])
-        obs = {}
-        for rl_id in self.agents:
-            lead = vk.get_leader(rl_id) or rl_id
-            speed = float(vk.get_speed(rl_id))
-            headway = float(vk.get_headway(rl_id)) if lead != rl_id else max_length
-            obs[rl_id] = np.array([speed / V_OBS_SCALE,
-                                   (float(vk.get_speed(lead)) - speed) / V_OBS_SCALE,
-                                   headway / max_length])  # fmt: skip
-        return obs
+        return leader_obs(self.k.vehicle, self.agents, max_length)
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> Any:
         """Each agent's ring reward (see the class docstring)."""
