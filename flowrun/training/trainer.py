@@ -14,13 +14,14 @@ import logging
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from flowrun.config.model import ExperimentConfig, TrainConfig
 from flowrun.envs.factory import env_class
 from flowrun.errors import ConfigError, TrainingError
 from flowrun.fastring.plan import check_numpy_backend
 from flowrun.rundir.folders import exit_code_of, mark_done, mark_running, start_run
+from flowrun.rundir.lock import FolderLock
 from flowrun.rundir.train_state import RunLock, StopRequest, write_status
 from flowrun.training.algorithms import algorithm_class, build_hyperparams
 from flowrun.training.callbacks import (
@@ -141,81 +142,136 @@ def train(
     tc = train_section(cfg)
     seed = train_seed(cfg)
     cfg = replace(cfg, sim=replace(cfg.sim, seed=int(cfg.sim.seed or 0)))
-    cls = with_worker_rollouts(algorithm_class(tc.algorithm))
-    build_hyperparams(tc.algorithm, tc.hyperparams)  # report a typo before any work
-    env_class(cfg)  # a wrong env.class or missing additional_params, also before any work
-    check_numpy_backend(cfg)  # sim.backend numpy: a config it cannot run, before any work
-    if tc.eval_backend == "numpy" and tc.eval_freq > 0:
-        numpy_eval_plan(cfg)  # likewise for the periodic evaluation's episodes
-    state: dict[str, Any] | None = None
-    if resume_dir is not None:
-        run_dir = resume_dir
-        state = resume_state(run_dir)
-        lock = RunLock(run_dir).acquire()
-        mark_running(run_dir)
-        note_resume(run_dir, cfg, state, argv)
-        keep_monitor_files(run_dir, int(state["timesteps"]))
-    else:
-        run_dir = start_run(out, cfg, seed, argv)
-        lock = RunLock(run_dir).acquire()
-    resumed_from = int((state or {}).get("timesteps", 0))
-    stop = should_stop or _never
-    status, done, error, exit_code = "failed", resumed_from, "", 1
-    venv: VecEnv | None = None
-    runner: Episodes | None = None
-    model: BaseAlgorithm | None = None
+    cls = _check_before_work(cfg, tc)
+    folder = _open_run(cfg, seed, out, resume_dir, argv)
+    run = _TrainingRun(cfg, tc, seed, timing, should_stop or _never, folder)
     try:
-        _write_train_metrics(run_dir, cfg, tc, seed, "running", done, timing, state)
+        run.learn(cls, progress)
+    except KeyboardInterrupt as err:
+        run.interrupted(exit_code_of(err))
+        raise
+    except Exception as err:
+        run.failed(err)  # raises unless asked to stop
+    finally:
+        run.close()
+    wall = timing.total - timing.startup
+    return TrainResult(run.run_dir, run.done, wall, run.status, run.resumed_from, timing)
+
+
+def _check_before_work(cfg: ExperimentConfig, tc: TrainConfig) -> type[BaseAlgorithm]:
+    """The algorithm class, after every check a config can fail before any work: the
+    algorithm and its hyper-parameter names, the env class and its additional_params, and a
+    numpy backend (of training or of the periodic evaluation) that cannot run the config."""
+    cls = with_worker_rollouts(algorithm_class(tc.algorithm))
+    build_hyperparams(tc.algorithm, tc.hyperparams)
+    env_class(cfg)
+    check_numpy_backend(cfg)
+    if tc.eval_backend == "numpy" and tc.eval_freq > 0:
+        numpy_eval_plan(cfg)
+    return cls
+
+
+class _RunFolder(NamedTuple):
+    """A run folder being trained in, its resume state (``None``: a new run) and its lock."""
+
+    run_dir: Path
+    state: dict[str, Any] | None
+    lock: FolderLock
+
+
+def _open_run(
+    cfg: ExperimentConfig, seed: int, out: Path, resume_dir: Path | None, argv: list[str] | None
+) -> _RunFolder:
+    """A new run folder under ``out``, or ``resume_dir`` marked running again (with its
+    resume state); locked."""
+    if resume_dir is None:
+        run_dir = start_run(out, cfg, seed, argv)
+        return _RunFolder(run_dir, None, RunLock(run_dir).acquire())
+    state = resume_state(resume_dir)
+    lock = RunLock(resume_dir).acquire()
+    mark_running(resume_dir)
+    note_resume(resume_dir, cfg, state, argv)
+    keep_monitor_files(resume_dir, int(state["timesteps"]))
+    return _RunFolder(resume_dir, state, lock)
+
+
+class _TrainingRun:
+    """One call of :func:`train`: its locked run folder, the parts it builds (env
+    processes, model, evaluation episodes) and how it ended, which :meth:`close` writes to
+    ``metrics.json`` and ``status.json`` whatever happened."""
+
+    def __init__(self, cfg: ExperimentConfig, tc: TrainConfig, seed: int, timing: TrainTiming,
+                 stop: StopRequested, folder: _RunFolder) -> None:  # fmt: skip
+        self.cfg, self.tc, self.seed, self.timing, self.stop = cfg, tc, seed, timing, stop
+        self.run_dir, self.state, self.lock = folder
+        self.resumed_from = int((self.state or {}).get("timesteps", 0))
+        self.done = self.resumed_from
+        self.status, self.error, self.exit_code = "failed", "", 1
+        self.venv: VecEnv | None = None
+        self.runner: Episodes | None = None
+        self.model: BaseAlgorithm | None = None
+
+    def learn(self, cls: type[BaseAlgorithm], progress: TrainProgress | None) -> None:
+        """Build the envs and the model, learn up to ``total_timesteps`` (or a stop) and save."""
+        cfg, tc, seed, run_dir, timing = self.cfg, self.tc, self.seed, self.run_dir, self.timing
+        self._write_metrics("running")
         start_forkserver_shielded()
-        venv = training_env(cfg, tc, seed, run_dir, state, timing)
-        model = make_model(cls, cfg, tc, venv, seed, run_dir, state)
+        self.venv = training_env(cfg, tc, seed, run_dir, self.state, timing)
+        model = self.model = make_model(cls, cfg, tc, self.venv, seed, run_dir, self.state)
         callbacks = make_callbacks(
             tc.algorithm, run_dir / "checkpoints", tc.checkpoint_freq, progress,
-            tc.total_timesteps, stop, timing,
+            tc.total_timesteps, self.stop, timing,
         )
         callbacks.append(timing_callback(timing))
         if tc.eval_freq > 0:
             baseline = time.perf_counter()
-            runner = eval_runner(cfg, tc, seed, stop)  # runs the all-human episodes
+            self.runner = eval_runner(cfg, tc, seed, self.stop)  # runs the all-human episodes
             timing.evaluation += time.perf_counter() - baseline
             callbacks.append(make_periodic_eval_callback(
-                runner, run_dir, tc.eval_freq, BEST_MODEL, BEST_VECNORMALIZE, timing,
+                self.runner, run_dir, tc.eval_freq, BEST_MODEL, BEST_VECNORMALIZE, timing,
             ))
-        extra = learn_kwargs(model, cfg, tc, seed, run_dir, stop)
-        status = _learn(model, tc, callbacks, state, stop, extra)
-        done = int(model.num_timesteps)
+        extra = learn_kwargs(model, cfg, tc, seed, run_dir, self.stop)
+        self.status = _learn(model, tc, callbacks, self.state, self.stop, extra)
+        self.done = int(model.num_timesteps)
         finish = time.perf_counter()
-        _save_end(model, run_dir, tc, status)
+        _save_end(model, run_dir, tc, self.status)
         timing.finish = time.perf_counter() - finish
-        exit_code = 0 if status == "complete" else _stop_code(stop)
-    except KeyboardInterrupt as err:
-        status, exit_code = "interrupted", exit_code_of(err)
-        _save_interrupted(model, run_dir, tc)
-        raise
-    except Exception as err:
-        if not stop():
+        self.exit_code = 0 if self.status == "complete" else _stop_code(self.stop)
+
+    def interrupted(self, exit_code: int) -> None:
+        """Stopped (Ctrl-C, or a child killed by the stop signal): save a checkpoint."""
+        self.status, self.exit_code = "interrupted", exit_code
+        _save_interrupted(self.model, self.run_dir, self.tc)
+
+    def failed(self, err: Exception) -> None:
+        """``err`` ended the training: re-raised (a dead env process as a
+        :class:`TrainingError`), unless a stop was asked for."""
+        if not self.stop():
             pipe = isinstance(err, EOFError | BrokenPipeError | ConnectionResetError)
-            error = (f"an environment process stopped unexpectedly ({err!r})" if pipe
-                     else f"{type(err).__name__}: {err}")
+            self.error = (f"an environment process stopped unexpectedly ({err!r})" if pipe
+                          else f"{type(err).__name__}: {err}")  # fmt: skip
             if pipe:
-                raise TrainingError(error) from err
-            raise
+                raise TrainingError(self.error) from err
+            raise err
         # Asked to stop, and the signal also reached a child (an env process, netconvert
         # building the evaluation's ring): that is how the stop looks, not a failure.
         log.info("stopping: %r", err)
-        status, exit_code = "interrupted", _stop_code(stop)
-        _save_interrupted(model, run_dir, tc)
-    finally:
-        done = int(model.num_timesteps) if model is not None else done
+        self.interrupted(_stop_code(self.stop))
+
+    def close(self) -> None:
+        """Close the env processes and evaluation episodes, write how the run ended, unlock."""
+        self.done = int(self.model.num_timesteps) if self.model is not None else self.done
         closing = time.perf_counter()
-        close_all(venv, runner)
-        timing.finish += time.perf_counter() - closing
-        timing.total = time.perf_counter() - timing.started
-        _write_train_metrics(run_dir, cfg, tc, seed, status, done, timing, state)
-        mark_done(run_dir, status, error=error or None, exit_code=exit_code)
-        lock.release()
-    wall = timing.total - timing.startup
-    return TrainResult(run_dir, done, wall, status, resumed_from, timing)
+        close_all(self.venv, self.runner)
+        self.timing.finish += time.perf_counter() - closing
+        self.timing.total = time.perf_counter() - self.timing.started
+        self._write_metrics(self.status)
+        mark_done(self.run_dir, self.status, error=self.error or None, exit_code=self.exit_code)
+        self.lock.release()
+
+    def _write_metrics(self, status: str) -> None:
+        _write_train_metrics(self.run_dir, self.cfg, self.tc, self.seed, status, self.done,
+                             self.timing, self.state)  # fmt: skip
 
 
 def _never() -> bool:
