@@ -157,7 +157,7 @@ def test_ray_backend_without_ray_names_the_install_command(
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, lines
     assert "flowrun sweep --backend ray needs the 'rllib' extra" in lines[0]
-    assert "pip install" in lines[0] and "flowrun[rllib]" in lines[0]
+    assert "pip install" in lines[0] and "'.[rllib]'" in lines[0]
     assert not tmp_path.joinpath("sugiyama").exists()
 
 

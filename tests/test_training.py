@@ -175,7 +175,7 @@ def test_missing_train_extra_says_how_to_install(monkeypatch: pytest.MonkeyPatch
     result = runner.invoke(app, ["train", str(CONFIG)])
     assert result.exit_code == 1
     assert "pip install torch==2.13.0" in result.output
-    assert "pip install 'flowrun[train]'" in result.output
+    assert "pip install -e '.[train]'" in result.output
 
 
 def test_all_human_baseline_drives_the_av_like_the_humans() -> None:

@@ -61,18 +61,22 @@ def _point(bench: Benchmark, kind: str, seed: int) -> SweepPoint:
 
 
 def _check_configs(plan: BenchmarkPlan) -> None:
-    """Load every benchmark's config and its baseline before anything runs.
+    """Load every benchmark's config and its baseline before anything runs; with --train,
+    check each recipe as ``flowrun train`` would (its library installed, its options).
 
     Raises:
         ConfigError: a missing or invalid config, or a --set it refuses (naming the benchmark).
     """
     from flowrun.experiment.baseline import resolve_steps
     from flowrun.loading.loader import load_config
+    from flowrun.preflight.prepare import check_recipe
 
     for bench in plan.benchmarks:
         path = bench.config_path(plan.configs)
         if not path.is_file():
             raise ConfigError(f"benchmark {bench.name}: no config {path}; pass --configs DIR")
+        if plan.train:
+            check_recipe(path, list(plan.sets))  # its own file:line: no benchmark prefix
         try:
             load_config(path, list(plan.sets))
             resolve_steps(load_config(path, [*plan.sets, *bench.baseline]), None)
@@ -109,8 +113,9 @@ def make_plan(
     benchmarks for :data:`QUICK_STEPS` steps (a quick look; a ``--set env.horizon`` wins).
 
     Raises:
-        ConfigError: an unknown benchmark, a bad number, a config that does not load.
-        FlowrunError: ``--train`` without stable-baselines3, an unusable ``out``.
+        ConfigError: an unknown benchmark, a bad number, a config that does not load, a
+            ``--train`` recipe whose library is not installed.
+        FlowrunError: an unusable ``out``.
     """
     from flowrun.experiment import benchmark as bm
     from flowrun.experiment.benchmark_run import folder_name
@@ -133,10 +138,6 @@ def make_plan(
         train=train,
         record=record,
     )
-    if train:
-        from flowrun.training.deps import require
-
-        require("stable_baselines3")
     _check_configs(plan)
     check_out_dir(out)
     return replace(plan, folder=unique_dir(plan.folder).resolve())

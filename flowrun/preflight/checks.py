@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import importlib.util
 import inspect
+import logging
 import os
 from collections.abc import Sequence
 from typing import Any
@@ -27,7 +28,10 @@ from flowrun.errors import ConfigError, TrainingError
 from flowrun.loading.experiment_checks import check_env_params, sub_path
 from flowrun.loading.flow_module import is_flow_module, load_any_config
 from flowrun.loading.loader import load_config_located
+from flowrun.preflight.installed import training_library_problem
 from flowrun.suggest import did_you_mean
+
+log = logging.getLogger(__name__)
 
 #: Built-in environments whose actions drive RL vehicles (training needs at least one).
 RL_VEHICLE_ENVS = ("AccelEnv", "LaneChangeAccelEnv", "WaveAttenuationEnv",
@@ -41,6 +45,9 @@ def validate_config(
 ) -> ExperimentConfig:
     """Load a YAML config (or Flow config module) and run every check a run would.
 
+    A ``train:`` section whose library is not installed is a warning, not an error: the
+    config is valid (``baseline`` runs it), ``train`` refuses it saying how to install it.
+
     Raises:
         ConfigError: the first problem, at its ``file:line`` and key path.
     """
@@ -50,6 +57,9 @@ def validate_config(
     else:
         cfg, locations = load_config_located(path, overrides)
     preflight(cfg, locations)
+    missing = training_library_problem(cfg, locations)
+    if missing is not None:
+        log.warning("%s; the config is valid (baseline runs it), only train needs it", missing)
     return cfg
 
 

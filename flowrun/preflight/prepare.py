@@ -17,6 +17,7 @@ from flowrun.errors import FlowrunError
 from flowrun.loading.flow_module import is_flow_module, load_any_config
 from flowrun.loading.loader import load_config, load_config_located
 from flowrun.preflight.checks import preflight
+from flowrun.preflight.installed import check_training_installed
 from flowrun.rundir.train_state import read_metrics, run_state
 
 
@@ -57,13 +58,15 @@ def prepare_training(
         ray_address: ``--ray-address`` (for RLlib only).
 
     Raises:
-        ConfigError: a config problem, at ``file:line``.
-        FlowrunError: a run folder that cannot be resumed, a missing training library, an
-            option that does not fit the backend.
+        ConfigError: a config problem (a training library that is not installed too), at
+            ``file:line``.
+        FlowrunError: a run folder that cannot be resumed, an option that does not fit the
+            backend.
     """
     notes: list[str] = []
     if resume is not None:
         cfg = _resumed_config(resume, overrides, out_given)
+        where = Locations(str(resume / "config.yaml"))
         notes.append(f"resuming {resume} with its config.yaml (CONFIG is not re-read)")
     else:
         if is_flow_module(config):
@@ -78,8 +81,23 @@ def prepare_training(
             )
         preflight(cfg, where)  # env class, its params, hyper-parameter names: at file:line
     rllib = cfg.train is not None and cfg.train.backend == "rllib"
-    _check_backend(rllib, ray_address)
+    check_training_installed(cfg, where)  # at train.algorithm's file:line, before any process
+    _check_ray_address(rllib, ray_address)
     return TrainPlan(cfg, rllib, notes)
+
+
+def check_recipe(config: Path, overrides: list[str]) -> ExperimentConfig:
+    """What ``train`` checks of a YAML config before it starts (``flowrun benchmark --train``
+    asks it of every benchmark before anything runs).
+
+    Raises:
+        ConfigError: a config problem or a training library that is not installed, at
+            ``file:line``.
+    """
+    cfg, where = load_config_located(config, overrides)
+    preflight(cfg, where)
+    check_training_installed(cfg, where)
+    return cfg
 
 
 def not_a_training_run(run_dir: Path) -> FlowrunError:
@@ -117,17 +135,9 @@ def _check_steps_left(run_dir: Path, total: int) -> None:
         )
 
 
-def _check_backend(rllib: bool, ray_address: str | None) -> None:
-    """The training library is installed; ``--ray-address`` only with RLlib."""
-    if rllib:
-        from flowrun.training.rllib import require_ray
-
-        require_ray()
-        return
-    from flowrun.training.deps import require
-
-    require("stable_baselines3")
-    if ray_address is not None:
+def _check_ray_address(rllib: bool, ray_address: str | None) -> None:
+    """``--ray-address`` only with RLlib."""
+    if ray_address is not None and not rllib:
         raise FlowrunError(
             "--ray-address is for train.backend: rllib; this config trains with "
             "stable-baselines3 (set train.backend: rllib, or drop --ray-address)"

@@ -9,7 +9,8 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-INSTALL_HINT = "pip install torch==2.13.0 && pip install 'flowrun[train]'"
+#: What installs the extra from the flowrun folder (torch first: its CPU build, not a CUDA one).
+INSTALL_HINT = "pip install torch==2.13.0 && pip install -e '.[train]' (in the flowrun folder)"
 
 
 def import_module(name: str) -> ModuleType:
@@ -31,6 +32,5 @@ def require(module: str = "stable_baselines3") -> ModuleType:
         missing = err.name or module
         raise TrainingError(
             f"training needs the 'train' extra, but the module '{missing}' is not installed; "
-            f"install it with: pip install torch==2.13.0 (first, so pip does not pull a large "
-            f"CUDA build), then pip install 'flowrun[train]'"
+            f"install it with: {INSTALL_HINT}"
         ) from None

@@ -8,7 +8,7 @@ from types import ModuleType
 from flowrun.errors import TrainingError
 
 #: The command that installs what ``train.backend: rllib`` needs (torch first: CPU build).
-INSTALL_HINT = "pip install torch==2.13.0 && pip install 'flowrun[rllib]'"
+INSTALL_HINT = "pip install torch==2.13.0 && pip install -e '.[rllib]' (in the flowrun folder)"
 
 
 def require_ray(purpose: str = "train.backend: rllib", rllib: bool = True) -> ModuleType:
