@@ -37,6 +37,7 @@ from flowrun.training.policy_functions import policy_act
 from flowrun.training.policy_functions import torch_policy as torch_policy
 
 if TYPE_CHECKING:
+    from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.callbacks import BaseCallback
 
     from flowrun.training.timing import TrainTiming
@@ -335,24 +336,43 @@ def make_periodic_eval_callback(
             previous_best = history.best
             mean = runner.score(scores)
             history.add(int(self.num_timesteps), scores, mean)
-            self.logger.record("eval/mean_reward", float(np.mean(history.results[-1])))
-            self.logger.record("eval/last_half_speed", float(np.mean(history.last_half_speed[-1])))
-            self.logger.record("eval/score", mean)
+            _log_evaluation(self.logger, history)
             if mean <= previous_best:
                 history.save(history_path)
                 return True
-            # Both files first to temporary names, then renamed: a kill leaves a matching pair.
-            tmp_model = run_dir / (Path(best_model).stem + ".tmp.zip")
-            self.model.save(tmp_model)
-            tmp_stats = run_dir / (best_stats + ".tmp")
-            if normalize is not None:
-                normalize.save(str(tmp_stats))
-            history.save(history_path)
-            tmp_model.replace(run_dir / best_model)
-            if normalize is not None:
-                tmp_stats.replace(run_dir / best_stats)
+            _save_best(self.model, normalize, history, history_path,
+                      run_dir / best_model, run_dir / best_stats)  # fmt: skip
             log.info("new best evaluation %.3f at %d steps", mean, self.num_timesteps)
             return True
 
     cb: BaseCallback = PeriodicEval()
     return cb
+
+
+def _log_evaluation(logger: Any, history: EvalHistory) -> None:
+    """The last evaluation's mean return, last-half speed and score to SB3's logger."""
+    logger.record("eval/mean_reward", float(np.mean(history.results[-1])))
+    logger.record("eval/last_half_speed", float(np.mean(history.last_half_speed[-1])))
+    logger.record("eval/score", history.score[-1])
+
+
+def _save_best(
+    model: BaseAlgorithm,
+    normalize: Any,
+    history: EvalHistory,
+    history_path: Path,
+    model_path: Path,
+    stats_path: Path,
+) -> None:
+    """A new best model, the ``VecNormalize`` statistics it was evaluated with (if any) and
+    the evaluation history that ranks it: both files first under temporary names, then
+    renamed, so a kill leaves a matching pair."""
+    tmp_model = model_path.with_name(model_path.stem + ".tmp.zip")
+    model.save(tmp_model)
+    tmp_stats = stats_path.with_name(stats_path.name + ".tmp")
+    if normalize is not None:
+        normalize.save(str(tmp_stats))
+    history.save(history_path)
+    tmp_model.replace(model_path)
+    if normalize is not None:
+        tmp_stats.replace(stats_path)
