@@ -24,10 +24,10 @@ import gymnasium
 import numpy as np
 
 from flowrun.config.params import EnvParams, SumoParams
-from flowrun.config.validate import check_params
 from flowrun.controllers.drivers import FlowStyleDriver, GroupRouters, bind_per_vehicle_groups
 from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.envs.additional_params import check_additional_params as check_additional_params
+from flowrun.envs.additional_params import check_env_arguments
 from flowrun.envs.output import GREY as GREY
 from flowrun.envs.output import EnvOutput
 from flowrun.envs.spaces import ActionClipper
@@ -37,7 +37,6 @@ from flowrun.envs.vehicles import (
     build_controllers,
     build_table,
 )
-from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
 
 if TYPE_CHECKING:  # the kernel, frames and painter are imported where an env starts
@@ -89,19 +88,10 @@ class Env(EnvOutput, gymnasium.Env, metaclass=ABCMeta):
         render_mode: str | None = None,
         work_dir: Path | None = None,
     ) -> None:
-        if network is None:
-            network = scenario  # Flow < 0.5 keyword
-        if network is None:
-            raise ConfigError("Env needs a network (network=... or Flow's old scenario=...)")
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ConfigError(
-                f"render_mode {render_mode!r} is not supported; use None or 'rgb_array'"
-            )
-        check_additional_params(type(self), env_params)
-        # objects built (or changed) in Python get the YAML's checks where they are used
-        check_params(
-            env_params, sim_params, network.net_params, network.initial_config, network.vehicles
-        )
+        network = check_env_arguments(
+            type(self), env_params, sim_params, network if network is not None else scenario,
+            render_mode,
+        )  # fmt: skip
         self.env_params = env_params
         self.sim_params = sim_params
         self.network = network
@@ -113,15 +103,19 @@ class Env(EnvOutput, gymnasium.Env, metaclass=ABCMeta):
         self.sim_step = sim_params.sim_step
         self.simulator = simulator
         self.render_mode = render_mode
-        self._own_dir = work_dir is None
-        self.work_dir = Path(tempfile.mkdtemp(prefix="flowrun-")) if work_dir is None else work_dir
         if isinstance(sim_params.render, str) and render_mode is None:
             self.render_mode = "rgb_array"  # Flow's frame modes (render="drgb"): env.render()
+        self._own_dir = work_dir is None
+        self.work_dir = Path(tempfile.mkdtemp(prefix="flowrun-")) if work_dir is None else work_dir
         self.k = self._make_kernel(network)
         self.controls: list[GroupControl] = build_controllers(network.vehicles)
         bind_per_vehicle_groups(self.controls, network.vehicles)  # Flow-style get_accel(env)
         self._flow_style = FlowStyleDriver(network.vehicles)
         self.k.group_routers = GroupRouters.of(network.vehicles)  # e.g. MinicityRouter
+        self._init_bookkeeping()
+
+    def _init_bookkeeping(self) -> None:
+        """The counters, caches and RL-car queues of an episode, before the first reset."""
         self.step_counter = 0
         self.time_counter = 0
         self.record_frames = False
