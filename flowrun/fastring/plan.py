@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from flowrun.config.model import ExperimentConfig
+from flowrun.config.vehicles import VehicleType
 from flowrun.controllers.base import AccelerationController
 from flowrun.envs.factory import env_class, make_network
 from flowrun.envs.ring.accel import AccelEnv
@@ -155,6 +156,49 @@ def ring_plan(cfg: ExperimentConfig) -> RingPlan:
     Raises:
         ConfigError: one message naming the first thing the backend cannot do.
     """
+    kind = _supported_kind(cfg)
+    network = make_network(cfg)
+    controls = build_controllers(cfg.vehicles)
+    speed_limit = float(cfg.network.net_params.additional_params.get("speed_limit", 30))
+    cars = _Cars()
+    for i, (g, ctl) in enumerate(zip(cfg.vehicles.groups, controls, strict=True)):
+        _check_group(f"vehicles[{i}]", g, ctl.controller, cfg.source)
+        cars.add(g, ctl.controller, speed_limit)
+    if cars.row < 2:
+        raise _refuse("needs at least two cars on the ring", "vehicles", cfg.source)
+    add = cfg.env.additional_params
+    return RingPlan(
+        cfg=cfg,
+        network=network,
+        kind=kind,
+        groups=tuple(cars.groups),
+        dt=float(cfg.sim.sim_step),
+        speed_limit=speed_limit,
+        lengths=cars.array("length"),
+        min_gap=cars.array("min_gap"),
+        accel=cars.array("accel"),
+        decel=cars.array("decel"),
+        emergency_decel=cars.array("emergency"),
+        tau=cars.array("tau"),
+        max_speed=cars.array("max_speed"),
+        des_speed=cars.array("des"),
+        safe_cap=cars.array("cap") > 0,
+        rl_rows=np.array(cars.rl_rows, dtype=np.int64),
+        noisy=tuple(cars.noisy),
+        bounds=ring_bounds(add) if kind in ("wave", "wave_po") else None,
+        horizon=int(cfg.env.horizon),
+        warmup=int(cfg.env.warmup_steps),
+        max_accel=float(add.get("max_accel", 1.0)),
+        max_decel=abs(float(add.get("max_decel", 1.0))),
+        target_velocity=float(add["target_velocity"]) if kind == "accel" else None,
+        evaluate=bool(cfg.env.evaluate),
+        clip_actions=bool(cfg.env.clip_actions),
+    )
+
+
+def _supported_kind(cfg: ExperimentConfig) -> str:
+    """The kind of the config's env (:data:`SUPPORTED_ENVS`), once the env, network,
+    simulation and episode settings are ones the backend runs."""
     src = cfg.source
     cls = env_class(cfg)
     kind = SUPPORTED_ENVS.get(cls)
@@ -163,8 +207,7 @@ def ring_plan(cfg: ExperimentConfig) -> RingPlan:
         raise _refuse(f"runs the env classes {names}, not {cls.__name__}", "env.class", src)
     if cfg.network.type != "ring":
         raise _refuse(f"runs ring networks only, not {cfg.network.type!r}", "network.type", src)
-    params = cfg.network.net_params.additional_params
-    if int(params.get("lanes", 1)) != 1:
+    if int(cfg.network.net_params.additional_params.get("lanes", 1)) != 1:
         raise _refuse("runs single-lane rings only", "network.lanes", src)
     if cfg.sim.use_ballistic:
         raise _refuse("uses SUMO's Euler update only", "sim.use_ballistic", src)
@@ -176,102 +219,83 @@ def ring_plan(cfg: ExperimentConfig) -> RingPlan:
         raise _refuse("does not sort AccelEnv's observation", "env.additional_params", src)
     if not np.isfinite(cfg.env.horizon):
         raise _refuse("needs a finite env.horizon", "env.horizon", src)
-    network = make_network(cfg)
-    controls = build_controllers(cfg.vehicles)
-    groups: list[GroupPlan] = []
-    facts: dict[str, list[float]] = {k: [] for k in (
-        "length", "min_gap", "accel", "decel", "emergency", "tau", "max_speed", "des", "cap"
-    )}  # fmt: skip
-    speed_limit = float(params.get("speed_limit", 30))
-    rl_rows: list[int] = []
-    noisy: list[tuple[int, int, float]] = []
-    row = 0
-    for i, (g, ctl) in enumerate(zip(cfg.vehicles.groups, controls, strict=True)):
-        where = f"vehicles[{i}]"
-        c = ctl.controller
-        if not _controller_ok(c):
-            raise _refuse(
-                f"runs RLController and stateless pure car-following formulas without "
-                f"fail-safes; group {g.veh_id!r} has {type(c).__name__}",
-                f"{where}.acceleration_controller",
-                src,
-            )
-        router = g.routing_controller.type if g.routing_controller else None
-        if router != "ContinuousRouter":
-            raise _refuse(
-                f"needs ContinuousRouter on every car; group {g.veh_id!r} has {router}",
-                f"{where}.routing_controller",
-                src,
-            )
-        cf = g.car_following_params
-        mode = int(cf.speed_mode)
-        if mode & _ACCEL_BITS:
-            raise _refuse(
-                f"models speed modes without SUMO's max-accel/decel checks (0, 1, 25); "
-                f"group {g.veh_id!r} has {mode}",
-                f"{where}.car_following.speed_mode",
-                src,
-            )
-        if (c.is_rl or mode & 1) and cf.car_follow_model != "IDM":
-            raise _refuse(
-                f"models SUMO's IDM for the cars SUMO drives or caps; group {g.veh_id!r} "
-                f"has carFollowModel {cf.car_follow_model}",
-                f"{where}.car_following.car_follow_model",
-                src,
-            )
-        if cf.speed_dev != 0:
-            raise _refuse("needs speed_dev 0", f"{where}.car_following.speed_dev", src)
-        n = g.num_vehicles
-        groups.append(GroupPlan(g.veh_id, row, row + n, c))
+    return kind
+
+
+def _check_group(
+    where: str, g: VehicleType, c: AccelerationController, src: str | None
+) -> None:
+    """Refuse a vehicle group (at ``where``) whose controller, router or car-following
+    settings the backend does not model."""
+    if not _controller_ok(c):
+        raise _refuse(
+            f"runs RLController and stateless pure car-following formulas without "
+            f"fail-safes; group {g.veh_id!r} has {type(c).__name__}",
+            f"{where}.acceleration_controller",
+            src,
+        )
+    router = g.routing_controller.type if g.routing_controller else None
+    if router != "ContinuousRouter":
+        raise _refuse(
+            f"needs ContinuousRouter on every car; group {g.veh_id!r} has {router}",
+            f"{where}.routing_controller",
+            src,
+        )
+    cf = g.car_following_params
+    mode = int(cf.speed_mode)
+    if mode & _ACCEL_BITS:
+        raise _refuse(
+            f"models speed modes without SUMO's max-accel/decel checks (0, 1, 25); "
+            f"group {g.veh_id!r} has {mode}",
+            f"{where}.car_following.speed_mode",
+            src,
+        )
+    if (c.is_rl or mode & 1) and cf.car_follow_model != "IDM":
+        raise _refuse(
+            f"models SUMO's IDM for the cars SUMO drives or caps; group {g.veh_id!r} "
+            f"has carFollowModel {cf.car_follow_model}",
+            f"{where}.car_following.car_follow_model",
+            src,
+        )
+    if cf.speed_dev != 0:
+        raise _refuse("needs speed_dev 0", f"{where}.car_following.speed_dev", src)
+
+
+class _Cars:
+    """The per-car facts of the groups added so far, in row order."""
+
+    KEYS = ("length", "min_gap", "accel", "decel", "emergency", "tau", "max_speed", "des", "cap")
+
+    def __init__(self) -> None:
+        self.groups: list[GroupPlan] = []
+        self.facts: dict[str, list[float]] = {k: [] for k in self.KEYS}
+        self.rl_rows: list[int] = []
+        self.noisy: list[tuple[int, int, float]] = []
+        self.row = 0
+
+    def add(self, g: VehicleType, c: AccelerationController, speed_limit: float) -> None:
+        """The group ``g`` driven by ``c``: its rows, and its vehicle type's facts per car
+        (``des``: the car's maximum lane speed, m/s; ``cap``: speed-mode bit 0)."""
+        cf, n, row = g.car_following_params, g.num_vehicles, self.row
+        self.groups.append(GroupPlan(g.veh_id, row, row + n, c))
         if c.is_rl:
-            rl_rows.extend(range(row, row + n))
+            self.rl_rows.extend(range(row, row + n))
         elif c.noise > 0:
-            noisy.append((row, row + n, float(c.noise)))
+            self.noisy.append((row, row + n, float(c.noise)))
         values = {
             "length": cf.length, "min_gap": cf.min_gap, "accel": cf.accel, "decel": cf.decel,
             "emergency": max(DEFAULT_EMERGENCY_DECEL, float(cf.decel)), "tau": cf.tau,
             "max_speed": cf.max_speed,
             "des": min(speed_limit * float(cf.speed_factor), float(cf.max_speed)),
-            "cap": float(mode & 1),
+            "cap": float(int(cf.speed_mode) & 1),
         }  # fmt: skip
         for key, value in values.items():
-            facts[key].extend([float(value)] * n)
-        row += n
-    if row < 2:
-        raise _refuse("needs at least two cars on the ring", "vehicles", src)
-    add = cfg.env.additional_params
-    bounds = ring_bounds(add) if kind in ("wave", "wave_po") else None
+            self.facts[key].extend([float(value)] * n)
+        self.row += n
 
-    def arr(key: str) -> FloatArray:
-        return np.array(facts[key], dtype=np.float64)
-
-    return RingPlan(
-        cfg=cfg,
-        network=network,
-        kind=kind,
-        groups=tuple(groups),
-        dt=float(cfg.sim.sim_step),
-        speed_limit=speed_limit,
-        lengths=arr("length"),
-        min_gap=arr("min_gap"),
-        accel=arr("accel"),
-        decel=arr("decel"),
-        emergency_decel=arr("emergency"),
-        tau=arr("tau"),
-        max_speed=arr("max_speed"),
-        des_speed=arr("des"),
-        safe_cap=arr("cap") > 0,
-        rl_rows=np.array(rl_rows, dtype=np.int64),
-        noisy=tuple(noisy),
-        bounds=bounds,
-        horizon=int(cfg.env.horizon),
-        warmup=int(cfg.env.warmup_steps),
-        max_accel=float(add.get("max_accel", 1.0)),
-        max_decel=abs(float(add.get("max_decel", 1.0))),
-        target_velocity=float(add["target_velocity"]) if kind == "accel" else None,
-        evaluate=bool(cfg.env.evaluate),
-        clip_actions=bool(cfg.env.clip_actions),
-    )
+    def array(self, key: str) -> FloatArray:
+        """One fact of every car, ``(N,)``."""
+        return np.array(self.facts[key], dtype=np.float64)
 
 
 def check_numpy_backend(cfg: ExperimentConfig) -> None:
