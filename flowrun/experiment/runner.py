@@ -148,77 +148,71 @@ class Experiment:
         if convert_to_csv and sink_factory is None:
             sink_factory = self._csv_sinks()
         env.collect_stats = True
-        returns, per_step, outflows = [], [], []
-        custom: dict[str, list[float]] = {key: [] for key in self.custom_callables}
         self.metrics = []
         self.csv_files = []
         env.record_frames = sink_factory is not None
-        hooks = self.hooks
+        runs: list[_Run] = []
         for run in range(num_runs):
-            sink: FrameSink | None = None
-            stats = RunAccumulator()
-            ret = 0.0
-            rewards = array("d")  # 8 bytes a step: memory stays flat over long runs
-            values: dict[str, list[Any]] = {key: [] for key in self.custom_callables}
-            started = False  # no metrics and no on_run_end for a run whose reset failed
+            done = _Run(run, self.custom_callables)
+            self._one_run(env, done, steps, rl_actions, seed, sink_factory)
+            done.outflow = _outflow(env)
+            runs.append(done)
+            log.info("run %d: return %.3f", run, done.ret)
+            if convert_to_csv and done.sink is not None:
+                self._export(done.sink, run)
+        return _info_dict(runs, list(self.custom_callables), self.metrics)
+
+    def _one_run(self, env: Any, done: _Run, steps: int, rl_actions: Callable[[Any], Any] | None,
+                 seed: int | None, sink_factory: SinkFactory | None) -> None:  # fmt: skip
+        """Reset, step to the run's end and record into ``done``; the queued steps are
+        written, the sink closed, the metrics kept and ``on_run_end`` called also when
+        interrupted (not when the reset failed)."""
+        started = False
+        try:
+            obs, _ = env.reset(seed=None if seed is None else seed + done.run)
+            started = True
+            done.sink = sink_factory(done.run) if sink_factory else None
+            if self.hooks is not None:
+                self.hooks.on_reset(env)
+            # The state after reset goes to the log at once (the recorder flushes its first
+            # frame): a run killed before the first batch still leaves a readable log.
+            self._drain(done.sink, done.stats)
+            self._step_to_end(env, done, obs, steps, rl_actions)
+        finally:
             try:
-                obs, _ = env.reset(seed=None if seed is None else seed + run)
-                started = True
-                sink = sink_factory(run) if sink_factory else None
-                if hooks is not None:
-                    hooks.on_reset(env)
-                # The state after reset goes to the log at once (the recorder flushes its first
-                # frame): a run killed before the first batch still leaves a readable log.
-                self._drain(sink, stats)
-                vehicles = max(env.k.vehicle.num_vehicles, 1)
-                drain_at = max(1, min(DRAIN_EVERY, DRAIN_VEHICLE_STEPS // vehicles))
-                for step in range(steps):
-                    action = rl_actions(obs) if rl_actions is not None else None
-                    if hooks is not None:
-                        hooks.before_step(env)
-                    obs, reward, terminated, truncated, _ = env.step(action)
-                    if hooks is not None:
-                        hooks.after_step(env)
-                    ret += reward
-                    rewards.append(reward)
-                    for key, fn in self.custom_callables.items():
-                        values[key].append(fn(env))
-                    if len(env.records) >= drain_at:
-                        self._drain(sink, stats)
-                    if self.progress is not None:
-                        self.progress(run, step + 1)
-                    if terminated or truncated:
-                        break
+                self._drain(done.sink, done.stats)  # also when interrupted: every step logged
             finally:
-                try:
-                    self._drain(sink, stats)  # also when interrupted: the log keeps every step
-                finally:
-                    if sink is not None:
-                        sink.close()
-                    if started:
-                        self.metrics.append(stats.result(run, ret))
-                        if hooks is not None:
-                            hooks.on_run_end(env, run)
-            returns.append(ret)
-            per_step.append(rewards.tolist())
-            outflows.append(_outflow(env))
-            for key, got in values.items():
-                custom[key].append(float(np.mean(got)) if got else float("nan"))
-            log.info("run %d: return %.3f", run, ret)
-            if convert_to_csv and sink is not None:
-                self._export(sink, run)
-        velocities = [m.mean_speed for m in self.metrics]
-        return {
-            "returns": returns,
-            "mean_returns": _mean(returns),
-            "per_step_returns": per_step,
-            "velocities": velocities,
-            "mean_velocities": _mean(velocities),
-            "outflows": outflows,
-            "mean_outflows": _mean(outflows),
-            **custom,
-            "metrics": list(self.metrics),
-        }
+                if done.sink is not None:
+                    done.sink.close()
+                if started:
+                    self.metrics.append(done.stats.result(done.run, done.ret))
+                    if self.hooks is not None:
+                        self.hooks.on_run_end(env, done.run)
+
+    def _step_to_end(self, env: Any, done: _Run, obs: Any, steps: int,
+                     rl_actions: Callable[[Any], Any] | None) -> None:  # fmt: skip
+        """Step until ``steps``, a collision or the horizon; queued steps are written in
+        batches (fewer steps per batch on networks with many cars)."""
+        hooks = self.hooks
+        vehicles = max(env.k.vehicle.num_vehicles, 1)
+        drain_at = max(1, min(DRAIN_EVERY, DRAIN_VEHICLE_STEPS // vehicles))
+        for step in range(steps):
+            action = rl_actions(obs) if rl_actions is not None else None
+            if hooks is not None:
+                hooks.before_step(env)
+            obs, reward, terminated, truncated, _ = env.step(action)
+            if hooks is not None:
+                hooks.after_step(env)
+            done.ret += reward
+            done.rewards.append(reward)
+            for key, fn in self.custom_callables.items():
+                done.values[key].append(fn(env))
+            if len(env.records) >= drain_at:
+                self._drain(done.sink, done.stats)
+            if self.progress is not None:
+                self.progress(done.run, step + 1)
+            if terminated or truncated:
+                break
 
     def _steps(self, num_steps: int | None) -> int:
         if num_steps is not None:
@@ -270,6 +264,43 @@ class Experiment:
                     sink.write(record.frame, step_stats)
                 else:
                     sink.write(record.frame, step_stats, record.signals)
+
+
+class _Run:
+    """What one run produced so far: its sink, statistics, return, rewards per step, the
+    custom callables' values and (at its end) its outflow, veh/h."""
+
+    def __init__(self, run: int, custom_callables: Mapping[str, Any]) -> None:
+        self.run = run
+        self.sink: FrameSink | None = None
+        self.stats = RunAccumulator()
+        self.ret = 0.0
+        self.rewards = array("d")  # 8 bytes a step: memory stays flat over long runs
+        self.values: dict[str, list[Any]] = {key: [] for key in custom_callables}
+        self.outflow = 0.0
+
+
+def _info_dict(runs: list[_Run], custom: list[str], metrics: list[RunMetrics]) -> dict[str, Any]:
+    """Flow's ``info_dict`` of the runs (see :meth:`Experiment.run`)."""
+    returns = [r.ret for r in runs]
+    velocities = [m.mean_speed for m in metrics]
+    outflows = [r.outflow for r in runs]
+    means = {key: [_mean_or_nan(r.values[key]) for r in runs] for key in custom}
+    return {
+        "returns": returns,
+        "mean_returns": _mean(returns),
+        "per_step_returns": [r.rewards.tolist() for r in runs],
+        "velocities": velocities,
+        "mean_velocities": _mean(velocities),
+        "outflows": outflows,
+        "mean_outflows": _mean(outflows),
+        **means,
+        "metrics": list(metrics),
+    }
+
+
+def _mean_or_nan(values: list[Any]) -> float:
+    return float(np.mean(values)) if values else float("nan")
 
 
 def _mean(values: list[float]) -> float:
