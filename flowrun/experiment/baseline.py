@@ -183,18 +183,7 @@ def _run(
     progress: Callable[[int, int], None] | None,
     scene: bool = False,
 ) -> BaselineResult:
-    try:
-        env = make_env(cfg, render_mode="rgb_array" if render else None, work_dir=run_dir / "sumo")
-    except BaseException as err:  # e.g. a user env's __init__: say so in the run folder too
-        status = INTERRUPTED if isinstance(err, KeyboardInterrupt) else FAILED
-        with suppress(OSError):
-            write_json(
-                run_dir / "metrics.json",
-                {"status": status, "partial": True, "config": cfg.name, "seed": seed,
-                 "error": str(err).strip().splitlines()[0] if str(err).strip() else repr(err),
-                 "runs": []},
-            )  # fmt: skip
-        raise
+    env = _make_env(cfg, run_dir, seed, render)
     logs: list[Path] = []
     film = _Film() if render else None
 
@@ -215,26 +204,11 @@ def _run(
     experiment = Experiment(
         env, sink_factory=sink if record else None, progress=on_step, hooks=hooks
     )
+    head = {"config": cfg.name, "seed": seed, "runs_planned": runs, "steps_per_run": n_steps}
 
     def summary(status: str) -> dict[str, Any]:
-        rows = [m.to_dict() for m in experiment.metrics]
-        for row, outflow in zip(rows, hooks.outflows, strict=False):
-            row["outflow"] = outflow
-        for row, signal in zip(rows, signals.results if signals else [], strict=False):
-            row.update(signal.to_dict())
-        data: dict[str, Any] = {
-            "status": status,
-            "partial": status != COMPLETE,
-            "config": cfg.name,
-            "seed": seed,
-            "runs_planned": runs,
-            "steps_per_run": n_steps,
-            "runs": rows,
-            "logs": [p.name for p in logs],
-        }
-        if signals is not None:
-            data["signal_controller"] = cfg.traffic_lights.controller
-        return data
+        return _summary(status, head, experiment.metrics, hooks.outflows, signals, logs,
+                        cfg.traffic_lights.controller)  # fmt: skip
 
     hooks.save = lambda: write_json(run_dir / "metrics.json", summary(RUNNING))
     write_json(run_dir / "metrics.json", summary(RUNNING))
@@ -256,6 +230,50 @@ def _run(
         run_dir, experiment.metrics, logs, COMPLETE, signal_runs, cfg.traffic_lights.controller,
         animation, list(hooks.outflows),
     )  # fmt: skip
+
+
+def _make_env(cfg: ExperimentConfig, run_dir: Path, seed: int, render: bool) -> Env:
+    """The config's env, working in ``run_dir/sumo``; if making it fails (e.g. a user env's
+    ``__init__``), ``metrics.json`` says so before the error propagates."""
+    try:
+        return make_env(cfg, render_mode="rgb_array" if render else None,
+                        work_dir=run_dir / "sumo")  # fmt: skip
+    except BaseException as err:
+        status = INTERRUPTED if isinstance(err, KeyboardInterrupt) else FAILED
+        with suppress(OSError):
+            write_json(
+                run_dir / "metrics.json",
+                {"status": status, "partial": True, "config": cfg.name, "seed": seed,
+                 "error": str(err).strip().splitlines()[0] if str(err).strip() else repr(err),
+                 "runs": []},
+            )  # fmt: skip
+        raise
+
+
+def _summary(
+    status: str,
+    head: dict[str, Any],
+    metrics: list[RunMetrics],
+    outflows: list[float],
+    signals: SignalRun | None,
+    logs: list[Path],
+    signal_controller: str | None,
+) -> dict[str, Any]:
+    """``metrics.json``: the status, the run's facts (``head``: config, seed, runs planned,
+    steps per run), one row per finished run (its metrics, outflow and signal measurements),
+    the logs' names and, on a network with traffic lights (``signals``), their controller."""
+    rows = [m.to_dict() for m in metrics]
+    for row, outflow in zip(rows, outflows, strict=False):
+        row["outflow"] = outflow
+    for row, signal in zip(rows, signals.results if signals else [], strict=False):
+        row.update(signal.to_dict())
+    data: dict[str, Any] = {
+        "status": status, "partial": status != COMPLETE, **head, "runs": rows,
+        "logs": [p.name for p in logs],
+    }  # fmt: skip
+    if signals is not None:
+        data["signal_controller"] = signal_controller
+    return data
 
 
 class _Film:
