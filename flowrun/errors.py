@@ -51,6 +51,19 @@ class CountMismatchError(ConfigError, AssertionError):
     for it, so Flow code catching that keeps working."""
 
 
+class BadValueError(ConfigError, ValueError):
+    """A parameter has a value its class refuses, e.g. an unknown controller ``fail_safe``.
+    Also a ``ValueError``, which is what Flow raises for it, so Flow code catching that keeps
+    working."""
+
+
+class UnknownNameError(ConfigError, KeyError):
+    """A name that is not there, e.g. a column a CSV does not have. Also a ``KeyError``, which
+    is what Flow raises for it."""
+
+    __str__ = Exception.__str__  # the message as written, not KeyError's quoted repr
+
+
 class FatalFlowError(FlowrunError):
     """An error after which the simulation cannot continue (Flow's ``FatalFlowError``, also
     importable from ``flowrun.utils.exceptions``).

@@ -152,6 +152,7 @@ def test_build_controller_unknown_parameter_has_did_you_mean() -> None:
         ({"s0": math.nan}, "s0 must be"),
         ({"noise": -0.1}, "noise must be"),
         ({"fail_safe": "instantanous"}, "did you mean 'instantaneous'"),
+        ({"fail_safe": True}, "fail_safe True is a bool; give a name or a list"),
     ],
 )
 def test_build_controller_bad_values_are_config_errors(params: dict, fragment: str) -> None:
@@ -159,6 +160,7 @@ def test_build_controller_bad_values_are_config_errors(params: dict, fragment: s
         build_controller("IDM", params)
     assert fragment in err.value.message
     assert err.value.path == next(iter(params))
+    assert isinstance(err.value, ValueError)  # what Flow raises for a bad value
 
 
 def test_gipps_decelerations_must_be_negative() -> None:

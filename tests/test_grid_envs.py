@@ -146,6 +146,24 @@ def make(env_cls: type, **params: object) -> TrafficLightGridEnv:
                        "g", vehicles, net.net_params))  # fmt: skip
 
 
+def test_flows_private_grid_helpers_number_edges_and_find_neighbour_lights() -> None:
+    env = make(TrafficLightGridEnv)  # 3 x 3, SUMO not started
+    try:
+        # Flow's numbering: per row of lights, its vertical edges then its horizontal ones
+        assert env._split_edge("left0_0") == 1 and env._split_edge("right0_0") == 2
+        assert env._split_edge("bot0_0") == 7 and env._split_edge("top0_0") == 8
+        assert env._split_edge(":center4") == 48 + 4 + 1 and env._split_edge("") == 0
+        assert env._convert_edge(["top0_0", "left0_0", ""]) == [8, 1, 0]
+        # lights numbered row by row from the bottom left; -1 past the grid's edge
+        assert [env._get_relative_node("center4", s) for s in ("top", "bottom", "left",
+                                                               "right")] == [7, 1, 3, 5]
+        assert env._get_relative_node("center2", "right") == -1
+        with pytest.raises(NotImplementedError):
+            env._get_relative_node("center0", "up")
+    finally:
+        env.close()
+
+
 def test_observation_sizes_are_flows_339_and_915() -> None:
     assert make(TrafficLightGridBenchmarkEnv).observation_space.shape == (339,)
     cfg = load_config(CONFIGS / "grid1.yaml")

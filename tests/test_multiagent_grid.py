@@ -18,9 +18,9 @@ from pettingzoo.test import parallel_api_test
 
 from flowrun.core import rewards
 from flowrun.envs.factory import make_env
+from flowrun.envs.signals import relative_node
 from flowrun.errors import ConfigError
 from flowrun.loading.loader import load_config
-from flowrun.multiagent.grid import neighbour_index
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 GRID = CONFIGS / "multiagent_grid.yaml"
@@ -37,15 +37,17 @@ def grid_env(*overrides: str) -> Iterator[Any]:
 
 def test_neighbours_follow_flows_numbering() -> None:
     # 3 x 3: center4 is in the middle; center0 bottom left; center8 top right
-    assert [neighbour_index(4, 3, 3, s) for s in ("top", "bottom", "left", "right")] == [
+    assert [relative_node(4, s, 3, 3) for s in ("top", "bottom", "left", "right")] == [
         7, 1, 3, 5,
     ]  # fmt: skip
-    assert [neighbour_index(0, 3, 3, s) for s in ("top", "bottom", "left", "right")] == [
+    assert [relative_node(0, s, 3, 3) for s in ("top", "bottom", "left", "right")] == [
         3, -1, -1, 1,
     ]  # fmt: skip
-    assert [neighbour_index(5, 2, 3, s) for s in ("top", "bottom", "left", "right")] == [
+    assert [relative_node(5, s, 2, 3) for s in ("top", "bottom", "left", "right")] == [
         -1, 2, 4, -1,
     ]  # fmt: skip
+    with pytest.raises(NotImplementedError, match="'blah'"):  # Flow's error type
+        relative_node(0, "blah", 3, 3)
 
 
 @pytest.mark.sumo

@@ -41,5 +41,12 @@ def test_the_command_follows_the_networks_mean_speed() -> None:
             got = NonLocalFollowerStopper(veh_id=vid).get_accel(env)
             assert got == pytest.approx((v_cmd[0] - v) / 0.1)
         assert 0.5 < mean < 10  # the FollowerStopper cars move with the traffic
+        # Flow's FollowerStopper helper, on the per-vehicle controller the kernel holds
+        for vid in ("fs_0", "fs_1"):
+            ctrl = vk.get_acc_controller(vid)
+            edge = vk.get_edge(vid)
+            expected = env.k.network.edge_length(edge) - vk.get_position(vid)
+            assert ctrl.find_intersection_dist(env) == pytest.approx(expected)
+            assert 0 <= expected <= env.k.network.edge_length(edge)
     finally:
         env.close()

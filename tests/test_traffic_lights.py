@@ -231,6 +231,40 @@ def test_set_state_overrides_the_program_and_is_read_back() -> None:
 
 
 @pytest.mark.sumo
+def test_set_state_before_reset_waits_for_the_start_and_a_longer_state_is_cut(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    # Flow's env runs SUMO from its construction and Flow's tests set a light right away;
+    # here the command waits until reset starts the simulation
+    env = grid_env(TrafficLightParams())
+    try:
+        k = env.k.traffic_light
+        k.set_state("center0", "gggggggggggg")  # 12 characters, 4 links: as Flow's tests
+        k.set_state("center1", "rGrG")
+        with pytest.raises(KeyError, match="has not started"):
+            k.get_state("center0")
+        with pytest.raises(KeyError, match="no traffic light 'center9'"):
+            k.set_state("center9", "GrGr")
+        with caplog.at_level("WARNING", logger="flowrun.kernel.traffic_light"):
+            env.reset(seed=0)
+        api = env.k.vehicle.api.trafficlight
+        assert api.getRedYellowGreenState("center0") == k.get_state("center0") == "gggg"
+        assert api.getRedYellowGreenState("center1") == "rGrG"
+        assert api.getRedYellowGreenState("center2") == "GrGr"  # the default program's
+        warned = [r.getMessage() for r in caplog.records]
+        assert len(warned) == 1 and "'center0' controls 4 links" in warned[0]
+        assert "'gggggggg' are ignored" in warned[0]
+        k.set_state("center0", "gggggggggggg")  # the same again: no second warning
+        env.step(None)
+        assert api.getRedYellowGreenState("center0") == "gggg"
+        assert len(caplog.records) == 1
+        env.reset(seed=0)  # sent once: the next start runs the programs again
+        assert api.getRedYellowGreenState("center0") == "GrGr"
+    finally:
+        env.close()
+
+
+@pytest.mark.sumo
 def test_no_car_crosses_on_red_and_cars_are_conserved() -> None:
     tl = TrafficLightParams()
     for i in range(4):

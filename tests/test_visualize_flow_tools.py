@@ -50,6 +50,11 @@ def test_progress_columns_are_plotted_and_unknown_ones_listed(tmp_path: Path) ->
     assert list(ax.lines[1].get_ydata()) == [2.0, 4.0, 5.0]
     with pytest.raises(ConfigError, match="no column 'reward'; the file has: episode_reward_mean"):
         plot_progress(path, ["reward"])
+    with pytest.raises(KeyError):  # what Flow raises for an unknown column
+        plot_progress(path, ["reward"])
+    path.write_text("episode_reward_mean,info\n1.5,{}\n")
+    with pytest.raises(ValueError, match=r"column 'info' holds '\{\}', not a number"):  # as Flow
+        plot_progress(path, ["info"])
     with pytest.raises(ConfigError, match="name the columns to plot"):
         plot_progress(path, [])
     args = progress_parser().parse_args([str(path), "a", "b"])

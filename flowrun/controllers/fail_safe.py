@@ -26,6 +26,12 @@ def check_fail_safe(fail_safe: str | Sequence[str] | None) -> tuple[str, ...]:
     """
     if fail_safe is None:
         return ()
+    if not isinstance(fail_safe, str | Sequence):
+        raise ParameterValueError(
+            f"fail_safe {fail_safe!r} is a {type(fail_safe).__name__}; give a name or a list "
+            "of names of: " + ", ".join(FAIL_SAFES),
+            "fail_safe",
+        )
     names = [fail_safe] if isinstance(fail_safe, str) else list(fail_safe)
     for name in names:
         if not isinstance(name, str) or name not in FAIL_SAFES:

@@ -15,7 +15,7 @@ import numpy as np
 
 from flowrun.controllers.limits import DEFAULT_MAX_ACCEL, DEFAULT_MAX_DECEL, vehicle_limits
 from flowrun.controllers.velocity import FollowerStopper, follower_stopper_speed
-from flowrun.controllers.view import read_inputs
+from flowrun.controllers.view import intersection_distance, read_inputs
 
 
 class NonLocalFollowerStopper(FollowerStopper):
@@ -49,3 +49,8 @@ class NonLocalFollowerStopper(FollowerStopper):
             d_1=self.d_1, d_2=self.d_2, d_3=self.d_3,
         )  # fmt: skip
         return float((v_cmd[0] - x.speed[0]) / x.dt)  # unclipped, as Flow's
+
+    def find_intersection_dist(self, env: Any) -> float:
+        """Distance (m) from this car to the end of its edge, as FollowerStopper's (Flow's
+        ``find_intersection_dist``): -10 without an edge, 0 on a grid junction's edge."""
+        return intersection_distance(env, str(self.veh_id))

@@ -37,7 +37,7 @@ from flowrun.controllers.per_vehicle import PerVehicleGroup
 from flowrun.controllers.rl import RLController, SimCarFollowingController
 from flowrun.controllers.routing import ContinuousRouter, GridRouter, Router
 from flowrun.controllers.velocity import FollowerStopper, PISaturation
-from flowrun.errors import ConfigError
+from flowrun.errors import BadValueError, ConfigError
 from flowrun.suggest import did_you_mean, unknown_name
 
 ControllerKind = Literal["acceleration", "routing", "lane_change"]
@@ -269,7 +269,8 @@ def _construct(cls: type[Any], params: dict[str, Any]) -> Any:
         return cls(**params)
     except (ValueError, TypeError) as exc:
         detail = str(exc).removeprefix(f"{cls.__name__}: ")
-        raise ConfigError(
+        error = BadValueError if isinstance(exc, ValueError) else ConfigError
+        raise error(
             f"bad parameters for {cls.__name__}: {detail}",
             path=getattr(exc, "param", ""),
         ) from exc

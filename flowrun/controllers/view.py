@@ -201,16 +201,8 @@ class VehicleControllerView:
         return None if math.isnan(value) else value
 
     def find_intersection_dist(self, env: Any) -> float:
-        """Distance (m) to the end of the vehicle's edge: Flow's ``-10`` without an edge, 0 on
-        an edge whose id contains ``center``."""
-        edge = env.k.vehicle.get_edge(self.veh_id)
-        if not edge:
-            return -10.0
-        if "center" in edge:
-            return 0.0
-        return float(env.k.network.edge_length(edge)) - float(
-            env.k.vehicle.get_position(self.veh_id)
-        )
+        """Distance (m) to the end of the vehicle's edge (:func:`intersection_distance`)."""
+        return intersection_distance(env, self.veh_id)
 
     def _handed_back(self, env: Any, edge: str) -> bool:
         danger = getattr(self.controller, "danger_edges", None)
@@ -221,6 +213,17 @@ class VehicleControllerView:
             x = float(env.k.vehicle.get_x_by_id(self.veh_id))
             return bool(x < control[0] or x > control[1])
         return False
+
+
+def intersection_distance(env: Any, veh_id: str) -> float:
+    """Flow's ``find_intersection_dist``: the distance (m) from the car to the end of its edge;
+    ``-10`` without an edge, 0 on an edge whose id contains ``center`` (a grid junction)."""
+    edge = env.k.vehicle.get_edge(veh_id)
+    if not edge:
+        return -10.0
+    if "center" in edge:
+        return 0.0
+    return float(env.k.network.edge_length(edge)) - float(env.k.vehicle.get_position(veh_id))
 
 
 def controller_rng(env: Any) -> np.random.Generator:

@@ -148,6 +148,8 @@ class Env(EnvOutput, gymnasium.Env, metaclass=ABCMeta):
             log.warning("render=True but no display or sumo-gui here: running headless")
         kernel = Kernel(self.sim_params, self.work_dir, gui=gui)
         kernel.network = NetworkKernel(network.spec, network=network)  # Flow: before reset
+        # Flow's lights exist from the env's construction: set_state before reset waits
+        kernel.traffic_light.expect([n.id for n in network.spec.nodes if n.type == "traffic_light"])
         return kernel
 
     # ------------------------------------------------------------------ Flow's hooks

@@ -129,3 +129,27 @@ def edge_number(edge: str, rows: int, cols: int) -> int:
         return num if kind == "bot" else num + 1
     num = rows_below + 2 * cols * row + 2 * col + 1
     return num if kind == "left" else num + 1
+
+
+#: Flow's directions of ``_get_relative_node``, as (row step, column step)
+_NEIGHBOUR_STEPS = {"top": (1, 0), "bottom": (-1, 0), "left": (0, -1), "right": (0, 1)}
+
+
+def relative_node(node: int, direction: str, rows: int, cols: int) -> int:
+    """Flow's ``_get_relative_node``: the index of the grid light next to light ``node`` in
+    ``direction`` (``top``: the next row up, ``bottom``, ``left``, ``right``), lights numbered
+    row by row from the bottom left (``center{row * cols + col}``); -1 at the grid's edge.
+
+    Raises:
+        NotImplementedError: an unknown direction (Flow's error type).
+    """
+    step = _NEIGHBOUR_STEPS.get(direction)
+    if step is None:
+        raise NotImplementedError(
+            f"direction {direction!r}; expected one of: {', '.join(_NEIGHBOUR_STEPS)}"
+        )
+    row, col = divmod(node, cols)
+    row, col = row + step[0], col + step[1]
+    if not (0 <= row < rows and 0 <= col < cols):
+        return -1
+    return row * cols + col

@@ -22,6 +22,7 @@ from flowrun.envs.signals import (
     discrete_mask,
     edge_number,
     phase_state,
+    relative_node,
 )
 from flowrun.errors import ConfigError
 from flowrun.networks.base import Network
@@ -223,6 +224,24 @@ class TrafficLightGridEnv(Env):
         if "center" in edge:
             return 0.0
         return self.k.network.edge_length(edge) - self.k.vehicle.get_position(veh_ids)
+
+    def _split_edge(self, edge: str) -> int:
+        """Flow's number of one grid edge: 1 to ``num_edges``, internal edges of ``center{k}``
+        after the others, 0 for no edge (see :func:`~flowrun.envs.signals.edge_number`)."""
+        return edge_number(edge, self.rows, self.cols)
+
+    def _convert_edge(self, edges: list[str]) -> list[int]:
+        """Flow's numbers of a list of grid edges (:meth:`_split_edge` of each)."""
+        return [edge_number(e, self.rows, self.cols) for e in edges]
+
+    def _get_relative_node(self, agent_id: str, direction: str) -> int:
+        """Flow's index of the light next to light ``agent_id`` (``center{k}``) in
+        ``direction`` (``top``, ``bottom``, ``left``, ``right``); -1 past the grid's edge.
+
+        Raises:
+            NotImplementedError: an unknown direction, as Flow's.
+        """
+        return relative_node(int(agent_id.split("center")[-1]), direction, self.rows, self.cols)
 
     def get_closest_to_intersection(
         self, edges: str | list[str], num_closest: int, padding: bool = False

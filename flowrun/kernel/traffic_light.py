@@ -6,16 +6,25 @@ first asked after a step (a step nobody asks about - an env that keeps its own s
 bookkeeping, recording off - reads nothing), and before any command of that step, so it is
 the state SUMO showed right after the step. ``set_state`` sends the new state to SUMO at once
 (Flow's ``setRedYellowGreenState`` / ``setLinkState``) and updates the snapshot, so a getter
-sees what SUMO will show in the next step.
+sees what SUMO will show in the next step. A state longer than the light's links is cut to
+them, with one warning naming the light and the ignored characters (SUMO ignores them too);
+a shorter one is an error.
+
+Flow's simulation runs from the env's construction, flowrun's from the first ``reset``: a
+``set_state`` before that is kept and sent when the simulation starts (checked then), before
+the env's ``reset`` sets its own initial signals.
 """
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
 import numpy as np
 
 from flowrun.suggest import did_you_mean
+
+log = logging.getLogger(__name__)
 
 #: SUMO's signal characters.
 _STATE_CHARS = frozenset("rRyYgGuoOs")
@@ -37,6 +46,16 @@ class TrafficLightKernel:
         self._stale = False  # the snapshot is of an earlier step: read it when first asked
         self._valid_states: set[str] = set()  # state strings set_state has checked
         self._pinned: dict[int, list[Any]] = {}  # see _pin
+        #: the network's lights before the simulation starts (see :meth:`expect`)
+        self._expected: list[str] = []
+        #: ``set_state`` calls made before the simulation started, sent when it starts
+        self._pending: list[tuple[str, str, int | str]] = []
+        self._warned: set[tuple[str, str]] = set()  # (light, state) warned as too long
+
+    def expect(self, ids: list[str]) -> None:
+        """The ids of the network's lights, known before the simulation starts: commands
+        for them are kept until it does (Flow's simulation runs from the env's construction)."""
+        self._expected = list(ids)
 
     # ------------------------------------------------------------------ kernel side
     def attach(self, api: Any) -> None:
@@ -71,6 +90,9 @@ class TrafficLightKernel:
             self._get_time = api.simulation.getTime
             self._set_state = tl.setRedYellowGreenState
         self.update()
+        pending, self._pending = self._pending, []
+        for node_id, state, link_index in pending:
+            self.set_state(node_id, state, link_index)
 
     def update(self) -> None:
         """Mark the snapshot stale after a simulation step: every light's state, phase,
@@ -137,6 +159,11 @@ class TrafficLightKernel:
     def _row(self, node_id: str) -> int:
         row = self._index.get(node_id)
         if row is None:
+            if self.api is None and node_id in self._expected:
+                raise KeyError(
+                    f"traffic light {node_id!r}: the simulation has not started; reset() "
+                    "starts it"
+                )
             known = ", ".join(self._ids) if self._ids else "none"
             raise KeyError(
                 f"no traffic light {node_id!r}{did_you_mean(node_id, self._ids)}; lights: {known}"
@@ -200,10 +227,16 @@ class TrafficLightKernel:
     def set_state(self, node_id: str, state: str, link_index: int | str = "all") -> None:
         """Set the light's state (``link_index="all"``) or one link's signal character.
 
+        A state longer than the light's links is cut to them (one warning per light and
+        state); before the simulation starts, the command is kept and sent when it starts.
+
         Raises:
             KeyError: unknown light.
-            ValueError: a state of the wrong length or with unknown characters.
+            ValueError: a state shorter than the light's links or with unknown characters.
         """
+        if self.api is None and node_id in self._expected:
+            self._pending.append((node_id, state, link_index))
+            return
         row = self._row(node_id)
         n = len(self._links[row])
         if state not in self._valid_states:
@@ -216,10 +249,7 @@ class TrafficLightKernel:
         whole = link_index == "all"
         if whole:
             if len(state) != n:
-                raise ValueError(
-                    f"state {state!r} has {len(state)} characters; light {node_id!r} "
-                    f"controls {n} links"
-                )
+                state = self._cut_to_links(node_id, state, n)
         else:
             index = int(link_index)
             if len(state) != 1 or not 0 <= index < n:
@@ -240,6 +270,22 @@ class TrafficLightKernel:
             self._programs[row] = "online"
         else:
             pin[0], pin[2] = new, "online"
+
+    def _cut_to_links(self, node_id: str, state: str, n: int) -> str:
+        """``state`` cut to the light's ``n`` links, warned once per light and state (SUMO
+        ignores the extra characters too); a shorter state is an error."""
+        if len(state) < n:
+            raise ValueError(
+                f"state {state!r} has {len(state)} characters; light {node_id!r} controls {n} "
+                "links (one character per link)"
+            )
+        if (node_id, state) not in self._warned:
+            self._warned.add((node_id, state))
+            log.warning(
+                "traffic light %r controls %d links; state %r is longer and its last "
+                "characters %r are ignored", node_id, n, state, state[n:],
+            )  # fmt: skip
+        return state[:n]
 
     def set_program(self, node_id: str, program_id: str) -> None:
         """Switch the light to one of its loaded programs."""

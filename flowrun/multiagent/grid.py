@@ -13,6 +13,7 @@ import numpy as np
 from gymnasium.spaces import Box, Discrete
 
 from flowrun.envs import flow_rewards as rewards
+from flowrun.envs.signals import relative_node
 from flowrun.envs.traffic_light_grid import TrafficLightGridPOEnv
 from flowrun.errors import ConfigError
 from flowrun.multiagent.base import MultiAgentEnv
@@ -28,29 +29,6 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
 OBS_HIGH = 5.0
 #: Neighbours in Flow's order (``_get_relative_node``).
 NEIGHBOURS = ("top", "bottom", "left", "right")
-
-
-def neighbour_index(light: int, rows: int, cols: int, side: str) -> int:
-    """Flow's ``_get_relative_node``: the light next to ``light`` on ``side``, -1 at the border.
-
-    Lights are numbered row by row from the bottom left (``center{row * cols + col}``).
-
-    Args:
-        light: the light's number.
-        rows: rows of the grid.
-        cols: columns of the grid.
-        side: ``top``, ``bottom``, ``left`` or ``right``.
-    """
-    row, col = divmod(light, cols)
-    if side == "top":
-        return light + cols if row + 1 < rows else -1
-    if side == "bottom":
-        return light - cols if row > 0 else -1
-    if side == "left":
-        return light - 1 if col > 0 else -1
-    if side == "right":
-        return light + 1 if col + 1 < cols else -1
-    raise ValueError(f"unknown side {side!r}")
 
 
 class MultiTrafficLightGridPOEnv(MultiAgentEnv, TrafficLightGridPOEnv):
@@ -112,7 +90,7 @@ class MultiTrafficLightGridPOEnv(MultiAgentEnv, TrafficLightGridPOEnv):
             [
                 [self._light_index[light]]
                 + [
-                    by_number.get(neighbour_index(number[light], self.rows, self.cols, s), n)
+                    by_number.get(relative_node(number[light], s, self.rows, self.cols), n)
                     for s in NEIGHBOURS
                 ]
                 for light in self.light_ids

@@ -9,7 +9,7 @@ import os
 from collections.abc import Sequence
 from typing import Any
 
-from flowrun.errors import ConfigError
+from flowrun.errors import BadValueError, ConfigError, UnknownNameError
 
 EXAMPLE_USAGE = (
     "plot_ray_results.py ~/ray_results/experiment-tag/experiment-name/seed-id/progress.csv "
@@ -23,8 +23,10 @@ def read_progress(
     """The values of ``columns`` in the CSV, row by row.
 
     Raises:
-        ConfigError: no columns named (the message lists the file's), an unknown column
-            (with the file's), or a value that is not a number.
+        ConfigError: no columns named (the message lists the file's); an unknown column
+            (with the file's: :class:`~flowrun.errors.UnknownNameError`, a ``KeyError`` as
+            Flow's), or a value that is not a number (:class:`~flowrun.errors.BadValueError`,
+            a ``ValueError`` as Flow's).
     """
     with open(filepath, newline="") as f:
         reader = csv.DictReader(f)
@@ -34,16 +36,16 @@ def read_progress(
                               "", str(filepath))  # fmt: skip
         unknown = [c for c in columns if c not in names]
         if unknown:
-            raise ConfigError(f"no column {unknown[0]!r}; the file has: {', '.join(names)}",
-                              "", str(filepath))  # fmt: skip
+            raise UnknownNameError(f"no column {unknown[0]!r}; the file has: "
+                                   f"{', '.join(names)}", "", str(filepath))  # fmt: skip
         data: dict[str, list[float]] = {c: [] for c in columns}
         for line, row in enumerate(reader, 2):
             for c in columns:
                 try:
                     data[c].append(float(row[c]))
                 except (TypeError, ValueError):
-                    raise ConfigError(f"column {c!r} holds {row[c]!r}, not a number", "",
-                                      f"{filepath}:{line}") from None  # fmt: skip
+                    raise BadValueError(f"column {c!r} holds {row[c]!r}, not a number", "",
+                                        f"{filepath}:{line}") from None  # fmt: skip
     return data
 
 
