@@ -108,14 +108,16 @@ def make_plan(
     seed: int | None,
     sets: list[str],
     out: Path,
+    budget: float | None = None,
 ) -> BenchmarkPlan:
     """What ``flowrun benchmark`` runs, checked before anything starts. No ``names``: all
     benchmarks for :data:`QUICK_STEPS` steps (a quick look; a ``--set env.horizon`` wins).
+    With ``budget`` (minutes), the estimated wall time must fit it.
 
     Raises:
         ConfigError: an unknown benchmark, a bad number, a config that does not load, a
             ``--train`` recipe whose library is not installed.
-        FlowrunError: an unusable ``out``.
+        FlowrunError: an unusable ``out``, an estimate over ``budget``.
     """
     from flowrun.experiment import benchmark as bm
     from flowrun.experiment.benchmark_run import folder_name
@@ -140,6 +142,8 @@ def make_plan(
     )
     _check_configs(plan)
     check_out_dir(out)
+    if budget is not None:
+        plan = _within_budget(plan, budget)
     return replace(plan, folder=unique_dir(plan.folder).resolve())
 
 
@@ -173,6 +177,20 @@ def benchmark(
     record: Annotated[
         bool, typer.Option("--record", help="Write MCAP logs of the baseline runs.")
     ] = False,
+    budget: Annotated[
+        float | None,
+        typer.Option(
+            "--budget",
+            metavar="MINUTES",
+            help="With --train: the wall time the whole command may take. Before anything "
+            "runs, an estimate (a 300-step probe of each benchmark's env, times the cores "
+            "training uses and the share of it training reaches, plus the baselines and "
+            "evaluation episodes) refuses what would not fit and says how to fit it; an "
+            "estimate, not a promise, so every training also stops when its share of the "
+            "time is up and the result files say it stopped at the budget.",
+            show_default=False,
+        ),
+    ] = None,
     seed: SeedOpt = None,
     set_: SetOpt = None,
     out: BenchmarkOutOpt = DEFAULT_OUT,
@@ -196,8 +214,24 @@ def benchmark(
     if not names:
         console.print(f"a quick look: every benchmark for {QUICK_STEPS} steps; "
                       "`flowrun benchmark all` runs them at full length", highlight=False)
-    plan = make_plan(names or [], seeds, jobs, train, configs, record, seed, set_ or [], out)
+    plan = make_plan(names or [], seeds, jobs, train, configs, record, seed, set_ or [], out,
+                     budget)  # fmt: skip
     _run(plan, jobs or os.cpu_count() or 1)
+
+
+def _within_budget(plan: BenchmarkPlan, minutes: float) -> BenchmarkPlan:
+    """Refuse a plan whose estimate exceeds the budget; else say the estimate and give the
+    trainings its deadline."""
+    from flowrun.preflight.budget import PROBE_STEPS, benchmark_budget
+
+    if not plan.train:
+        raise ConfigError("--budget limits the trainings of --train; add --train or drop it")
+    console.print(f"estimating the wall time: a {PROBE_STEPS}-step probe of each benchmark's "
+                  "env", highlight=False)  # fmt: skip
+    paths = [bench.config_path(plan.configs) for bench in plan.benchmarks]
+    fits = benchmark_budget(paths, plan.sets, len(plan.seeds), minutes)
+    console.print(fits.describe(), highlight=False, markup=False)
+    return replace(plan, deadline=fits.deadline_text)
 
 
 def _run(plan: BenchmarkPlan, jobs: int) -> None:

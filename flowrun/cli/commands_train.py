@@ -39,6 +39,25 @@ if TYPE_CHECKING:
 RunDirArg = Annotated[
     Path, typer.Argument(help="A train run folder.", metavar="RUN_DIR", show_default=False)
 ]
+BudgetOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--budget",
+        metavar="MINUTES",
+        help="Wall time the training may take. Before it starts, an estimate (a 300-step "
+        "probe of one env's speed, times the cores training uses and the share of it "
+        "training reaches, plus the evaluation episodes) refuses a recipe that would not "
+        "fit and says how to fit it; an estimate, not a promise, so training also stops "
+        "when the time is up (a complete run with fewer steps; metrics.json says "
+        "stopped_at_budget). stable-baselines3 only.",
+        show_default=False,
+    ),
+]
+DeadlineOpt = Annotated[
+    str | None,
+    # flowrun benchmark --budget passes its trainings the end of its budget this way
+    typer.Option("--deadline", hidden=True, help="Stop training at this ISO 8601 time."),
+]
 EvalOutOpt = Annotated[
     Path | None,
     out_option("the evaluation folders, OUT/<timestamp>-<seed>/ (default OUT: RUN_DIR/eval)"),
@@ -84,6 +103,8 @@ def train(
             help="Ray cluster for train.backend: rllib (default: $RAY_ADDRESS, else a local Ray).",
         ),
     ] = None,
+    budget: BudgetOpt = None,
+    deadline: DeadlineOpt = None,
 ) -> None:
     """Train the config's policy (train: section) with stable-baselines3 (or RLlib with
     train.backend: rllib), then evaluate it.
@@ -93,7 +114,9 @@ def train(
     saved config is used (plus --set, e.g. a larger train.total_timesteps) and training
     continues from its last checkpoint, keeping the earlier monitor files, evaluations and
     best model. Ctrl-C or SIGTERM saves a checkpoint and exits with 130 / 143.
+    --budget MINUTES estimates the wall time first and refuses what would not fit.
     """
+    from flowrun.preflight.budget import PROBE_STEPS, parse_deadline, train_budget
     from flowrun.preflight.prepare import prepare_training
 
     overrides = overrides_with_seed(set_, seed)
@@ -103,9 +126,16 @@ def train(
     feedback = Feedback(console)
     for note in plan.notes:
         feedback.phase(note)
+    stop_at = parse_deadline(deadline) if deadline is not None else None
+    if budget is not None:
+        feedback.phase(f"estimating the wall time: a {PROBE_STEPS}-step probe of one env")
+        fits = train_budget(plan.cfg, budget, resume)
+        feedback.phase(fits.describe())
+        stop_at = fits.deadline
     feedback.phase(_start_phase(plan.cfg, plan.rllib))
     cfg, rllib, train_cfg = plan.cfg, plan.rllib, plan.train
-    result = _train_with_progress(feedback, cfg, out, resume, rllib, ray_address, config)
+    result = _train_with_progress(feedback, cfg, out, resume, rllib, ray_address, config,
+                                  stop_at)  # fmt: skip
     feedback.phase(_finished_phase(result))
     episodes = train_cfg.eval_episodes
     feedback.phase(
@@ -119,6 +149,7 @@ def train(
 def _finished_phase(result: TrainResult) -> str:
     """What training did: steps, time, speed and the evaluations' share."""
     resumed = f" (resumed at {result.resumed_from})" if result.resumed_from else ""
+
     timing = result.timing
     share = (
         f", evaluation {timing.evaluation_share:.0%} of it"
@@ -126,7 +157,8 @@ def _finished_phase(result: TrainResult) -> str:
         else ""
     )
     return (
-        f"training finished: {result.timesteps} steps{resumed} in {duration(result.wall_clock)}"
+        f"training {'stopped at the --budget' if result.stopped_at_budget else 'finished'}: "
+        f"{result.timesteps} steps{resumed} in {duration(result.wall_clock)}"
         f" ({result.steps_per_second:.0f} steps/s{share})"
     )
 
@@ -151,6 +183,7 @@ def _train_with_progress(
     rllib: bool,
     ray_address: str | None,
     config: Path,
+    deadline: float | None = None,
 ) -> TrainResult:
     """Run the training with its progress display; exit 130/143 when interrupted."""
     from flowrun.training.trainer import train as run_training
@@ -182,7 +215,7 @@ def _train_with_progress(
                                      argv=sys.argv, should_stop=stop, ray_address=ray_address)
             else:
                 result = run_training(cfg, out=out, resume_dir=resume, progress=progress,
-                                      argv=sys.argv, should_stop=stop)
+                                      argv=sys.argv, should_stop=stop, deadline=deadline)
         except KeyboardInterrupt:
             console.print("[yellow]interrupted[/]: checkpoint saved; continue with --resume")
             raise typer.Exit(code=stop.exit_code) from None

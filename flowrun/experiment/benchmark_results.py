@@ -137,6 +137,7 @@ def make_record(
         "recipe": train_config,
         "timesteps": train_metrics.get("timesteps"),
         "train_status": train_metrics.get("status"),
+        "stopped_at_budget": bool(train_metrics.get("stopped_at_budget")),
         "train_wall_s": train_metrics.get("wall_clock_s"),
         "model": model,
         "eval_seeds": eval_seeds()[: len(policy)],
@@ -197,12 +198,16 @@ def table_rows(records: Sequence[Mapping[str, Any]]) -> list[list[str]]:
 
 
 def _seed_text(rec: Mapping[str, Any]) -> str:
-    """``0``, or ``0 (stopped at 1.34M of 2.1M steps)`` for a training that did not finish."""
-    if rec.get("train_status") in (None, "complete"):
+    """``0``, or ``0 (stopped at 1.34M of 2.1M steps)`` for a training that did not finish
+    (``... at the budget``: stopped by ``--budget``)."""
+    budget = bool(rec.get("stopped_at_budget"))
+    if rec.get("train_status") in (None, "complete") and not budget:
         return str(rec["train_seed"])
     total = (rec.get("recipe") or {}).get("total_timesteps")
     of = f" of {total / 1e6:.3g}M" if isinstance(total, int | float) else ""
-    return f"{rec['train_seed']} (stopped at {(rec.get('timesteps') or 0) / 1e6:.3g}M{of} steps)"
+    done = (rec.get("timesteps") or 0) / 1e6
+    why = " at the budget" if budget else ""
+    return f"{rec['train_seed']} (stopped{why} at {done:.3g}M{of} steps)"
 
 
 TABLE_HEADER = [

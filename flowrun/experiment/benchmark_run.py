@@ -59,6 +59,7 @@ class BenchmarkPlan:
         sets: the ``--set`` values applied to every benchmark (before the baseline's own).
         train: also train each benchmark's policy and score it.
         record: write MCAP logs of the baseline runs.
+        deadline: with ``--budget``: when every training stops at the latest (ISO 8601).
     """
 
     folder: Path
@@ -68,6 +69,7 @@ class BenchmarkPlan:
     sets: tuple[str, ...] = ()
     train: bool = False
     record: bool = False
+    deadline: str | None = None
 
     @property
     def baseline_seeds(self) -> tuple[int, ...]:
@@ -102,7 +104,8 @@ def train_command(plan: BenchmarkPlan, bench: Benchmark, seed: int) -> list[str]
     """The ``flowrun train`` command of one benchmark and training seed."""
     cmd = [*FLOWRUN, "train", str(bench.config_path(plan.configs)), *_sets(plan.sets)]
     out = plan.folder / "train" / bench.name / f"seed={seed}"
-    return [*cmd, "--seed", str(seed), "--out", str(out)]
+    cmd += ["--seed", str(seed), "--out", str(out)]
+    return cmd if plan.deadline is None else [*cmd, "--deadline", plan.deadline]
 
 
 def train_run(plan: BenchmarkPlan, bench: Benchmark, seed: int) -> Path | None:

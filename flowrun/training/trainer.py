@@ -13,6 +13,7 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass, replace
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -76,6 +77,8 @@ class TrainResult:
         status: ``complete`` or ``interrupted``.
         resumed_from: timesteps of the checkpoint this call started from (0 for a new run).
         timing: where the time went.
+        stopped_at_budget: training reached its ``deadline`` before ``total_timesteps`` (the
+            run is ``complete``, with fewer steps).
     """
 
     run_dir: Path
@@ -84,6 +87,7 @@ class TrainResult:
     status: str
     resumed_from: int = 0
     timing: TrainTiming | None = None
+    stopped_at_budget: bool = False
 
     @property
     def steps_per_second(self) -> float:
@@ -116,6 +120,7 @@ def train(
     progress: TrainProgress | None = None,
     argv: list[str] | None = None,
     should_stop: StopRequested | None = None,
+    deadline: float | None = None,
 ) -> TrainResult:
     """Train the config's policy with stable-baselines3 and write the run folder.
 
@@ -129,6 +134,10 @@ def train(
         argv: the command line saved in ``command.txt``.
         should_stop: polled at every step (and during evaluations); once true, training
             stops, saves a checkpoint and returns with ``status == "interrupted"``.
+        deadline: when learning stops at the latest (seconds since the epoch, a wall-time
+            budget): at the next step boundary after it, the run ends as a ``complete`` one
+            with fewer steps (final model, checkpoint), and ``metrics.json`` records
+            ``stopped_at_budget: true`` and the deadline.
 
     A ``KeyboardInterrupt`` also saves a checkpoint, writes ``metrics.json`` with
     ``status: interrupted`` and propagates. While training, the folder is locked
@@ -144,7 +153,7 @@ def train(
     cfg = replace(cfg, sim=replace(cfg.sim, seed=int(cfg.sim.seed or 0)))
     cls = _check_before_work(cfg, tc)
     folder = _open_run(cfg, seed, out, resume_dir, argv)
-    run = _TrainingRun(cfg, tc, seed, timing, should_stop or _never, folder)
+    run = _TrainingRun(cfg, tc, seed, timing, should_stop or _never, folder, deadline)
     try:
         run.learn(cls, progress)
     except KeyboardInterrupt as err:
@@ -155,7 +164,8 @@ def train(
     finally:
         run.close()
     wall = timing.total - timing.startup
-    return TrainResult(run.run_dir, run.done, wall, run.status, run.resumed_from, timing)
+    stopped = bool(run.budget.get("stopped_at_budget"))
+    return TrainResult(run.run_dir, run.done, wall, run.status, run.resumed_from, timing, stopped)
 
 
 def _check_before_work(cfg: ExperimentConfig, tc: TrainConfig) -> type[BaseAlgorithm]:
@@ -201,8 +211,12 @@ class _TrainingRun:
     ``metrics.json`` and ``status.json`` whatever happened."""
 
     def __init__(self, cfg: ExperimentConfig, tc: TrainConfig, seed: int, timing: TrainTiming,
-                 stop: StopRequested, folder: _RunFolder) -> None:  # fmt: skip
+                 stop: StopRequested, folder: _RunFolder,
+                 deadline: float | None = None) -> None:  # fmt: skip
         self.cfg, self.tc, self.seed, self.timing, self.stop = cfg, tc, seed, timing, stop
+        self.deadline, self.at_deadline = deadline, _past(deadline)
+        self.halt = _either(stop, self.at_deadline)  # a signal, or the budget's end
+        self.budget = _budget_fields(deadline, False)
         self.run_dir, self.state, self.lock = folder
         self.resumed_from = int((self.state or {}).get("timesteps", 0))
         self.done = self.resumed_from
@@ -220,7 +234,7 @@ class _TrainingRun:
         model = self.model = make_model(cls, cfg, tc, self.venv, seed, run_dir, self.state)
         callbacks = make_callbacks(
             tc.algorithm, run_dir / "checkpoints", tc.checkpoint_freq, progress,
-            tc.total_timesteps, self.stop, timing,
+            tc.total_timesteps, self.halt, timing,
         )
         callbacks.append(timing_callback(timing))
         if tc.eval_freq > 0:
@@ -230,8 +244,10 @@ class _TrainingRun:
             callbacks.append(make_periodic_eval_callback(
                 self.runner, run_dir, tc.eval_freq, BEST_MODEL, BEST_VECNORMALIZE, timing,
             ))
-        extra = learn_kwargs(model, cfg, tc, seed, run_dir, self.stop)
-        self.status = _learn(model, tc, callbacks, self.state, self.stop, extra)
+        extra = learn_kwargs(model, cfg, tc, seed, run_dir, self.halt)
+        self.status = _learn(model, tc, callbacks, self.state, self.halt, extra)
+        if self.status == "interrupted" and not self.stop() and self.at_deadline():
+            self.status, self.budget = "complete", _budget_fields(self.deadline, True)
         self.done = int(model.num_timesteps)
         finish = time.perf_counter()
         _save_end(model, run_dir, tc, self.status)
@@ -271,11 +287,30 @@ class _TrainingRun:
 
     def _write_metrics(self, status: str) -> None:
         _write_train_metrics(self.run_dir, self.cfg, self.tc, self.seed, status, self.done,
-                             self.timing, self.state)  # fmt: skip
+                             self.timing, self.state, self.budget)  # fmt: skip
 
 
 def _never() -> bool:
     return False
+
+
+def _past(deadline: float | None) -> StopRequested:
+    """Whether the wall clock passed ``deadline`` (never, without one)."""
+    if deadline is None:
+        return _never
+    return lambda: time.time() >= deadline
+
+
+def _either(first: StopRequested, second: StopRequested) -> StopRequested:
+    return lambda: first() or second()
+
+
+def _budget_fields(deadline: float | None, stopped: bool) -> dict[str, Any]:
+    """``metrics.json``'s record of a wall-time budget (nothing without one)."""
+    if deadline is None:
+        return {}
+    when = datetime.fromtimestamp(deadline, UTC).isoformat(timespec="seconds")
+    return {"budget_deadline": when, "stopped_at_budget": stopped}
 
 
 def _stop_code(stop: StopRequested) -> int:
@@ -328,6 +363,7 @@ def _write_train_metrics(
     done: int,
     timing: TrainTiming,
     state: dict[str, Any] | None,
+    budget: dict[str, Any],
 ) -> None:
     resumed = int((state or {}).get("timesteps", 0))
     learning = timing.total - timing.startup
@@ -344,4 +380,5 @@ def _write_train_metrics(
         wall_clock_s=round(timing.total, 3),
         steps_per_s=round((done - resumed) / learning, 1) if learning > 0 else None,
         timing=timing.to_dict(),
+        **budget,
     )
