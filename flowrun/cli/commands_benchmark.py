@@ -186,8 +186,8 @@ def benchmark(
             "runs, an estimate (a 300-step probe of each benchmark's env, times the cores "
             "training uses and the share of it training reaches, plus the baselines and "
             "evaluation episodes) refuses what would not fit and says how to fit it; an "
-            "estimate, not a promise, so every training also stops when its share of the "
-            "time is up and the result files say it stopped at the budget.",
+            "estimate, not a promise, so every training also stops when the time is up (less "
+            "the evaluations that follow) and its result file says it stopped at the budget.",
             show_default=False,
         ),
     ] = None,

@@ -57,9 +57,11 @@ def register(app: typer.Typer) -> None:
         is imported, so its top-level code runs).
         Every problem a run would refuse is reported here first, as one line with the file,
         line and key path, and exit code 1; nothing is written. Settings that would have no
-        effect are warned about. An import path (env.class: my_envs:MyEnv, a controller
-        type: pkg.mod:Class) is imported to check it, so its module's top-level code runs,
-        as it would in baseline/train. --set and --seed as in baseline/train, e.g.
+        effect are warned about, and so is a train: section whose algorithm needs a package
+        that is not installed (the config is valid and baseline runs it; train refuses it).
+        An import path (env.class: my_envs:MyEnv, a controller type: pkg.mod:Class) is
+        imported to check it, so its module's top-level code runs, as it would in
+        baseline/train. --set and --seed as in baseline/train, e.g.
         --set sim.step=0.5 --set vehicles[0].count=10.
         """
         from flowrun.config import dump_config
