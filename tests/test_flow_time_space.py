@@ -102,3 +102,58 @@ def test_a_real_runs_csv_plots_every_car(tmp_path: Path) -> None:
     fig = Figure()
     lines = plot_tsd(fig.add_subplot(), df, segs, {"min_speed": 0, "max_speed": 10})
     assert len(lines.get_segments()) == len(df)
+
+
+FIG8_CSV = """time,id,speed,edge_id,lane_number,relative_position
+1.0,a,1.0,top,0,20.0
+2.0,a,1.0,top,0,28.0
+1.0,b,1.0,upper_ring,0,20.0
+2.0,b,1.0,upper_ring,0,21.0
+1.0,c,1.0,left,0,25.0
+2.0,c,1.0,left,0,26.0
+"""
+
+
+def test_figure_eight_diagram_is_folded_at_the_intersection_as_flows(tmp_path: Path) -> None:
+    from flowrun.networks.figure_eight import FigureEightNetwork
+
+    path = tmp_path / "fig8.csv"
+    path.write_text(FIG8_CSV)
+    net = NetParams(additional_params={"radius_ring": 30, "lanes": 1, "speed_limit": 30,
+                                       "resolution": 40})  # fmt: skip
+    segs, _ = get_time_space_data(
+        import_data_from_trajectory(path, {"network": FigureEightNetwork, "net": net}),
+        {"network": FigureEightNetwork, "net": net},
+    )
+    # Flow's layout: intersection middles c0 = 30.28 + 30, c1 = 238.41 + 30 (edge starts of
+    # :center_1 / :center_0 + the radius); its length L = 6 * 15 pi + 120 + 12.4 + 2.8
+    c0, c1 = 60.28, 238.41166941154066 + 30
+    length = 90 * np.pi + 135.2
+    top, upper, left = 36.48, 66.76, 244.61166941154067
+    # a: before c0 then past it; b: between c0 and c1; c: past c1
+    np.testing.assert_allclose(segs[:, :, 1], [
+        [c0 - (top + 20), (top + 28) - c1],
+        [upper + 20 - c1, upper + 21 - c1],
+        [c0 + length - (left + 25), c0 + length - (left + 26)],
+    ])  # fmt: skip
+    # cars running to the intersection from either side meet at 0 there
+    assert abs(segs[0, 0, 1]) < abs(segs[0, 0, 1] - segs[2, 0, 1])
+
+
+def test_merge_diagram_keeps_flows_on_ramp_edges(tmp_path: Path) -> None:
+    from flowrun.networks.merge import MergeNetwork
+
+    path = tmp_path / "merge.csv"
+    path.write_text("""time,id,speed,edge_id,lane_number,relative_position
+0.2,h,0.0,inflow_highway,0,4.86
+0.4,h,0.1,inflow_highway,0,4.88
+0.2,m,0.0,inflow_merge,0,6.89
+0.4,m,0.2,inflow_merge,0,6.93
+""")
+    net = NetParams(additional_params={"merge_length": 100, "pre_merge_length": 500,
+                                       "post_merge_length": 100, "merge_lanes": 1,
+                                       "highway_lanes": 1, "speed_limit": 30})  # fmt: skip
+    params = {"network": MergeNetwork, "net": net}
+    segs, data = get_time_space_data(import_data_from_trajectory(path, params), params)
+    assert list(data["id"]) == ["m"]
+    np.testing.assert_allclose(segs, [[[0.2, 722.6 + 6.89], [0.4, 722.6 + 6.93]]])

@@ -83,7 +83,10 @@ def import_data_from_trajectory(
     df = pd.read_csv(fp).rename(columns={"time": "time_step", "lane_number": "lane_id"})
     if "distance" not in df.columns:
         starts = _edge_starts(params or {})
-        df["distance"] = df["relative_position"] + df["edge_id"].map(starts).fillna(0.0)
+        distance = df["relative_position"] + df["edge_id"].map(starts).fillna(0.0)
+        if _network_name(params) == "FigureEightNetwork":
+            distance = _fold_figure_eight(distance.to_numpy(dtype=float), starts, params or {})
+        df["distance"] = distance
     df[["next_pos", "next_time"]] = df.groupby("id")[["distance", "time_step"]].shift(-1)
     return df[df["next_time"].notna()]
 
@@ -95,10 +98,45 @@ def time_space_segments(data: Any, params: Mapping[str, Any] | None = None) -> t
         ``(segs, data)``: ``segs`` an ``(n, 2, 2)`` array of ``[[t0, x0], [t1, x1]]``, one per
         row of ``data``; for Flow's I210 sub-network a dict of such arrays keyed by lane.
     """
-    network = (params or {}).get("network")
-    if getattr(network, "__name__", None) == "I210SubNetwork":
+    name = _network_name(params)
+    if name == "I210SubNetwork":
         return {lane: _segments(df) for lane, df in data.groupby("lane_id")}, data
+    if name == "MergeNetwork":  # Flow's merge diagram: the on-ramp's edges only
+        data = data[data["edge_id"].isin(_MERGE_EDGES)]
     return _segments(data), data
+
+
+#: the edges Flow's merge diagram keeps
+_MERGE_EDGES = ("inflow_merge", "bottom", ":bottom_0")
+
+
+def _network_name(params: Mapping[str, Any] | None) -> str | None:
+    return getattr((params or {}).get("network"), "__name__", None)
+
+
+def _fold_figure_eight(x: np.ndarray, starts: Mapping[str, float], params: Mapping[str, Any]
+                       ) -> np.ndarray:  # fmt: skip
+    """Flow's figure-eight layout of the diagram: positions (m along the network) folded at
+    the intersection, so cars approaching it from one side run down the plot from the top
+    and those from the other side up from the bottom.
+
+    With ``c0``/``c1`` the middle of the intersection on the first/second pass (the start of
+    ``:center_1``/``:center_0`` plus the ring radius) and ``L`` Flow's length of the figure
+    eight (``6 * r * pi / 2 + 4 * r + 2 * junction + 10 * 0.28``, junction ``2.9 + 3.3 *
+    lanes``): ``x - c1`` between them, ``c0 + L - x`` past ``c1``, and before ``c0`` (once
+    moved up by ``L``) ``c0 - x``, as Flow's.
+    """
+    extra = params["net"].additional_params
+    radius, lanes = float(extra["radius_ring"]), float(extra["lanes"])
+    length = 6 * radius * np.pi / 2 + 4 * radius + 2 * (2.9 + 3.3 * lanes) + 10 * 0.28
+    c0, c1 = starts[":center_1"] + radius, starts[":center_0"] + radius
+    out = x.copy()
+    out[x < c0] += length
+    middle = (x > c0) & (x < c1)
+    out[middle] -= c1
+    past = out > c1  # Flow's order: the ones moved up by L included
+    out[past] = c0 + length - out[past]
+    return out
 
 
 def _segments(df: Any) -> np.ndarray:
