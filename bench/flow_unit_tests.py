@@ -33,6 +33,7 @@ import sys
 import tarfile
 import tempfile
 import time
+import traceback
 import unittest
 from dataclasses import dataclass, field
 from io import BytesIO
@@ -111,6 +112,16 @@ KNOWN: dict[str, tuple[str, str]] = {
     "test_vehicles.TestMultiLaneData.test_no_junctions_highway": (
         DELIBERATE, "SUMO 1.28's junction links (lengths of the highway's internal lanes)"),
     "test_vehicles.TestMultiLaneData.test_no_junctions_ring": (DELIBERATE, _RING),
+    "test_visualizers.TestPlotters.test_time_space_diagram_ring_road": (
+        DELIBERATE,
+        "positions from flowrun's ring edge starts, which have no 0.1 m junctions (Flow's "
+        "emission file was written on Flow's ring)",
+    ),
+    "test_visualizers.TestPlotters.test_plot_ray_results": (
+        DELIBERATE,
+        "with no column named, Flow's plot_progress prints the file's columns to stdout; "
+        "flowrun's raises an error listing them (library code does not print)",
+    ),
     "test_visualizers.TestVisualizerRLlib": (
         OUT_OF_SCOPE,
         "Flow's test checkpoints are Ray 0.8 TensorFlow policies, which Ray 2 cannot restore",
@@ -221,11 +232,11 @@ class _Recorder(unittest.TextTestResult):
 
     def addFailure(self, test, err) -> None:  # type: ignore[no-untyped-def]
         super().addFailure(test, err)
-        self._write(test, "failed", self._exc_info_to_string(err, test))
+        self._write(test, "failed", "".join(traceback.format_exception(*err)))
 
     def addError(self, test, err) -> None:  # type: ignore[no-untyped-def]
         super().addError(test, err)
-        self._write(test, "error", self._exc_info_to_string(err, test))
+        self._write(test, "error", "".join(traceback.format_exception(*err)))
 
     def addSkip(self, test: unittest.TestCase, reason: str) -> None:
         super().addSkip(test, reason)
@@ -252,7 +263,12 @@ def run_one(module: str, out: Path) -> None:
     with out.open("w") as f:
         f.write(json.dumps({"count": count, "import_failed": failed_import}) + "\n")
     _Recorder.out = out
-    unittest.TextTestRunner(resultclass=_Recorder, verbosity=0, stream=sys.stderr).run(suite)
+    runner = unittest.TextTestRunner(
+        resultclass=_Recorder,  # type: ignore[arg-type]  # typeshed's generic result type
+        verbosity=0,
+        stream=sys.stderr,
+    )
+    runner.run(suite)
 
 
 def _iter_tests(suite: unittest.TestSuite) -> list[unittest.TestCase]:

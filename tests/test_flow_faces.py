@@ -14,7 +14,8 @@ import grimp
 ROOT = Path(__file__).resolve().parent.parent
 MARK = "Flow compatibility: re-exports."
 #: Flow's packages: every module in them is a re-export.
-FLOW_PACKAGES = ("flowrun.core", "flowrun.utils", "flowrun.scenarios", "flowrun.visualize")
+FLOW_PACKAGES = ("flowrun.core", "flowrun.utils", "flowrun.scenarios", "flowrun.visualize",
+                 "flowrun.renderer")
 
 
 def _tree(module: str) -> ast.Module:
