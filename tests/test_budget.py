@@ -30,6 +30,9 @@ from flowrun.preflight.budget import (
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE_EIGHT = ROOT / "configs/benchmarks/figureeight0.yaml"
 RING = ROOT / "configs/ring_wave.yaml"
+# figureeight0 as an ARS recipe of 1M steps evaluated every 96k steps (2 episodes of 1500)
+RECIPE_1M = ["train.total_timesteps=1000000", "train.eval_freq=96000",
+             "train.best_by=speed_ratio"]
 SMALL = ["env.horizon=200", "env.warmup_steps=0", "train.n_envs=2", "train.algorithm=PPO",
          "train.hyperparams={n_steps: 128, batch_size: 128, n_epochs: 1}",
          "train.policy_kwargs.net_arch=[8]", "train.eval_episodes=1", "train.eval_freq=0",
@@ -58,7 +61,7 @@ def test_estimate_divides_training_by_rate_cores_and_efficiency() -> None:
 
 
 def test_workload_counts_the_evaluation_episodes() -> None:
-    cfg = load_config(FIGURE_EIGHT)  # ARS 1M steps, eval every 96k, 2 episodes of 1500
+    cfg = load_config(FIGURE_EIGHT, RECIPE_1M)
     work = workload(cfg, runs=3, benchmark=True)
     assert work.train_steps == 3_000_000 and work.n_envs == 2
     periodic = 3 * (1 + 1_000_000 // 96_000) * 2 * 1500  # the all-human reference, then 10
@@ -66,10 +69,13 @@ def test_workload_counts_the_evaluation_episodes() -> None:
     assert work.after_steps == 3 * 2 * 2 * 1500 + 3 * 2 * 5 * 1500  # final + flowrun eval
     resumed = workload(cfg, runs=1, benchmark=False, done=400_000)
     assert resumed.train_steps == 600_000 and resumed.after_steps == 2 * 2 * 1500
+    by_return = workload(load_config(FIGURE_EIGHT, [*RECIPE_1M, "train.best_by=return"]), 1,
+                         benchmark=False)  # fmt: skip
+    assert by_return.eval_steps == (1_000_000 // 96_000) * 2 * 1500  # no all-human reference
 
 
 def test_plan_refuses_an_estimate_over_the_budget_and_says_how_to_fit() -> None:
-    cfg = load_config(FIGURE_EIGHT)
+    cfg = load_config(FIGURE_EIGHT, RECIPE_1M)
     work = workload(cfg, runs=1, benchmark=False)
 
     def probe(_: object) -> float:
@@ -122,7 +128,7 @@ def test_result_file_says_the_training_stopped_at_the_budget() -> None:
 def test_a_tiny_budget_is_refused_before_anything_runs(tmp_path: Path) -> None:
     out = tmp_path / "out"
     result = runner.invoke(app, ["benchmark", "figureeight0", "--train", "--budget", "0.01",
-                                 "--out", str(out)])  # fmt: skip
+                                 *_set(RECIPE_1M), "--out", str(out)])  # fmt: skip
     assert result.exit_code == 1
     assert "error: estimated " in result.stderr and "over the --budget of 0.01 min" in result.stderr
     assert "figureeight0: 1 run(s), 1M training steps at " in result.stderr
@@ -163,7 +169,9 @@ def test_training_stops_at_its_deadline_as_a_complete_run(tmp_path: Path) -> Non
     (run,) = (tmp_path / "ring_wave").iterdir()
     metrics = json.loads((run / "metrics.json").read_text())
     assert metrics["status"] == "complete" and metrics["stopped_at_budget"] is True
-    assert 0 < metrics["timesteps"] < 10_000_000
+    # how many steps fit in 8 s depends on the machine's load (none when the env processes
+    # start slowly); the stop itself does not
+    assert metrics["timesteps"] < 10_000_000
     assert metrics["budget_deadline"] == when
     assert (run / "final_model.zip").is_file()  # the model at the deadline, evaluated
     assert json.loads(next((run / "eval").glob("*/metrics.json")).read_text())["status"] == (

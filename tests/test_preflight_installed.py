@@ -21,8 +21,19 @@ from flowrun.preflight.installed import check_training_installed, training_libra
 from flowrun.training import deps
 
 ROOT = Path(__file__).resolve().parents[1]
-FIGURE_EIGHT = ROOT / "configs/benchmarks/figureeight0.yaml"  # ARS, train.algorithm: line 57
-MERGE = ROOT / "configs/benchmarks/merge0.yaml"  # PPO, train.algorithm: line 63
+FIGURE_EIGHT = ROOT / "configs/benchmarks/figureeight0.yaml"  # ARS
+
+
+def algorithm_line(path: Path) -> int:
+    """The line of ``train.algorithm`` in a shipped config."""
+    lines = path.read_text().splitlines()
+    return lines.index("train:") + 1 + next(
+        i for i, text in enumerate(lines[lines.index("train:"):]) if text.startswith("  algorithm:")
+    )
+
+
+ALGORITHM_LINE = algorithm_line(FIGURE_EIGHT)
+MERGE = ROOT / "configs/benchmarks/merge0.yaml"  # PPO
 RLLIB = ROOT / "configs/rllib_ring.yaml"  # train.backend: rllib at line 40
 TRAIN_HINT = "pip install torch==2.13.0 && pip install -e '.[train]'"
 
@@ -53,9 +64,9 @@ def trpo_config(tmp_path: Path) -> tuple[Path, int]:
 @pytest.mark.parametrize(
     ("blocked", "config", "line", "package"),
     [
-        ("sb3_contrib", FIGURE_EIGHT, 57, "sb3-contrib"),
-        ("stable_baselines3", MERGE, 63, "stable-baselines3"),
-        ("torch", MERGE, 63, "torch"),
+        ("sb3_contrib", FIGURE_EIGHT, ALGORITHM_LINE, "sb3-contrib"),
+        ("stable_baselines3", MERGE, algorithm_line(MERGE), "stable-baselines3"),
+        ("torch", MERGE, algorithm_line(MERGE), "torch"),
     ],
 )
 def test_train_without_the_algorithm_library_is_one_located_line(
@@ -94,14 +105,15 @@ def test_benchmark_train_checks_every_recipe_before_any_baseline(tmp_path: Path)
     out = tmp_path / "out"
     done = flowrun_without("sb3_contrib", "benchmark", "figureeight0", "--train", "--out", out)
     assert done.returncode == 1
-    assert f"{FIGURE_EIGHT}:57: train.algorithm: ARS needs sb3-contrib" in done.stderr
+    assert f"{FIGURE_EIGHT}:{ALGORITHM_LINE}: train.algorithm: ARS needs sb3-contrib" in done.stderr
     assert not out.exists()  # no benchmark folder: no baseline ran
 
 
 def test_validate_warns_and_accepts_the_config() -> None:
     done = flowrun_without("sb3_contrib", "validate", FIGURE_EIGHT)
     assert done.returncode == 0
-    assert "figureeight0.yaml:57: train.algorithm: ARS needs sb3-contrib" in done.stderr
+    where = f"figureeight0.yaml:{ALGORITHM_LINE}"
+    assert f"{where}: train.algorithm: ARS needs sb3-contrib" in done.stderr
     assert "the config is valid (baseline runs it), only train needs it" in done.stderr
     assert "algorithm: ARS" in done.stdout  # the resolved config is printed
 
@@ -119,7 +131,7 @@ def test_check_in_process_names_the_missing_module(monkeypatch: pytest.MonkeyPat
     monkeypatch.setattr(deps, "import_module", without_contrib)
     with pytest.raises(ConfigError) as err:
         check_training_installed(cfg, loc)
-    assert err.value.location.endswith("figureeight0.yaml:57")
+    assert err.value.location.endswith(f"figureeight0.yaml:{ALGORITHM_LINE}")
     assert err.value.path == "train.algorithm"
     cfg, loc = load_config_located(MERGE, [])
     check_training_installed(cfg, loc)  # PPO needs no sb3-contrib

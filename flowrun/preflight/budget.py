@@ -137,7 +137,8 @@ def workload(cfg: ExperimentConfig, runs: int, benchmark: bool, done: int = 0) -
     horizon = cfg.env.horizon
     episode = int(horizon) + cfg.env.warmup_steps if math.isfinite(horizon) else 0
     left = max(0, tc.total_timesteps - done)
-    evaluations = 1 + left // tc.eval_freq if tc.eval_freq > 0 else 0
+    reference = 1 if tc.best_by == "speed_ratio" else 0  # the all-human episodes, once
+    evaluations = reference + left // tc.eval_freq if tc.eval_freq > 0 else 0
     during = runs * evaluations * tc.eval_episodes * episode
     after = runs * 2 * tc.eval_episodes * episode  # the final evaluation: policy and all-human
     if benchmark:
