@@ -13,7 +13,9 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from typer.testing import CliRunner
 
+from flowrun.cli.main import app
 from flowrun.config.yamlio import Locations
 from flowrun.errors import ConfigError
 from flowrun.loading.loader import load_config_located
@@ -136,3 +138,18 @@ def test_check_in_process_names_the_missing_module(monkeypatch: pytest.MonkeyPat
     cfg, loc = load_config_located(MERGE, [])
     check_training_installed(cfg, loc)  # PPO needs no sb3-contrib
     assert training_library_problem(replace(cfg, train=None), Locations("x.yaml")) is None
+
+
+def test_benchmark_train_reports_a_recipe_typo_before_any_baseline(tmp_path: Path) -> None:
+    configs = tmp_path / "configs"
+    configs.mkdir()
+    text = FIGURE_EIGHT.read_text()
+    (configs / "figureeight0.yaml").write_text(text.replace("n_delta: 8", "n_deltas: 8"))
+    line = text[: text.index("n_delta: 8")].count("\n") + 1
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["benchmark", "figureeight0", "--train", "--configs",
+                                      str(configs), "--out", str(out)])  # fmt: skip
+    assert result.exit_code == 1
+    assert (f"{configs / 'figureeight0.yaml'}:{line}: train.hyperparams.n_deltas: ARS has no "
+            "hyper-parameter 'n_deltas' (did you mean 'n_delta'?)") in result.stderr
+    assert not out.exists()
