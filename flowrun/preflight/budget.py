@@ -297,8 +297,16 @@ def _how(estimates: Sequence[Estimate]) -> str:
     parts = "; ".join(e.describe() for e in estimates)
     return (
         f"{parts}; env steps/s from a {PROBE_STEPS}-step probe of one env, "
-        f"{estimates[0].cores} core(s) here"
+        f"{estimates[0].cores} core(s) here{_load()}"
     )
+
+
+def _load() -> str:
+    """`` at load 5.2`` (the 1-minute load average: the probe ran under it), where known."""
+    try:
+        return f" at load {os.getloadavg()[0]:.1f}"
+    except (AttributeError, OSError):
+        return ""
 
 
 def _fits(estimates: Sequence[Estimate], minutes: float) -> str:
