@@ -144,8 +144,8 @@ def test_benchmark_train_reports_a_recipe_typo_before_any_baseline(tmp_path: Pat
     configs = tmp_path / "configs"
     configs.mkdir()
     text = FIGURE_EIGHT.read_text()
-    (configs / "figureeight0.yaml").write_text(text.replace("n_delta: 8", "n_deltas: 8"))
-    line = text[: text.index("n_delta: 8")].count("\n") + 1
+    (configs / "figureeight0.yaml").write_text(text.replace("n_delta: ", "n_deltas: "))
+    line = text[: text.index("n_delta: ")].count("\n") + 1
     out = tmp_path / "out"
     result = CliRunner().invoke(app, ["benchmark", "figureeight0", "--train", "--configs",
                                       str(configs), "--out", str(out)])  # fmt: skip
