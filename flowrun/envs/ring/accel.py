@@ -6,6 +6,7 @@ figure eight, ...): Flow's figureeight0/1/2 benchmarks run it on the figure eigh
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import Any, ClassVar
 
 import numpy as np
@@ -15,6 +16,7 @@ from flowrun.envs.base import Env
 from flowrun.envs.rewards import desired_velocity
 from flowrun.envs.ring.tasks import (
     AccelTask,
+    RingActions,
     RingTask,
     WaveTask,
     acceleration_box,
@@ -114,10 +116,26 @@ class RingAccelBase(Env):
 
     @property
     def action_space(self) -> Box:  # type: ignore[override]
-        """One acceleration per RL vehicle."""
-        return acceleration_box(
+        """One acceleration per RL vehicle (the ring task's, :attr:`ring_actions`)."""
+        return self.ring_actions.space
+
+    @cached_property
+    def ring_actions(self) -> RingActions:
+        """The ring task's actions: bounds from ``additional_params``, one per RL car placed
+        at the start."""
+        return RingActions(
             self.env_params.additional_params, self.initial_vehicles.num_rl_vehicles
         )
+
+    def clip_actions(self, rl_actions: Any) -> Any:
+        """The ring task's action handling for a batch of one ring
+        (:meth:`RingActions.accelerations`): the RL cars' accelerations, m/s^2, clipped to
+        the action space when ``env_params.clip_actions``. A subclass with an action space
+        of its own (:class:`LaneChangeAccelEnv`) keeps :meth:`Env.clip_actions`."""
+        if self._spaces()[0] is not self.ring_actions.space:
+            return super().clip_actions(rl_actions)
+        actions = np.reshape(rl_actions, (1, -1))
+        return self.ring_actions.accelerations(actions, self.env_params.clip_actions)[:, 0]
 
     @property
     def observation_space(self) -> Box:  # type: ignore[override]

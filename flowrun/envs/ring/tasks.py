@@ -104,8 +104,34 @@ def acceleration_box(additional_params: dict[str, Any], num_rl: int) -> Box:
     )
 
 
+class RingActions:
+    """A ring task's actions: one acceleration per RL car in ``[-|max_decel|, max_accel]``
+    m/s^2 (:func:`acceleration_box`).
+
+    Args:
+        additional_params: the env's ``additional_params``.
+        num_rl: RL cars per ring.
+    """
+
+    def __init__(self, additional_params: dict[str, Any], num_rl: int) -> None:
+        self.space = acceleration_box(additional_params, num_rl)
+        self.low = np.asarray(self.space.low, dtype=np.float64)
+        self.high = np.asarray(self.space.high, dtype=np.float64)
+
+    def accelerations(self, actions: Any, clip: bool) -> FloatArray:
+        """Actions ``(B, num_rl)`` as the RL cars' accelerations ``(num_rl, B)``, m/s^2,
+        clipped to the action space when ``clip`` (``env.clip_actions``)."""
+        b = np.shape(actions)[0]
+        if self.low.size == 0:
+            return np.zeros((0, b))
+        a = np.asarray(actions, dtype=np.float64).reshape(-1, self.low.size)
+        if clip:
+            a = np.minimum(np.maximum(a, self.low), self.high)
+        return np.ascontiguousarray(a.T)
+
+
 class RingTask:
-    """A ring task: its spaces, and its observation and reward of a batch of rings.
+    """A ring task: its spaces, and its actions, observation and reward of a batch of rings.
 
     Args:
         additional_params: the env's ``additional_params``.
@@ -120,9 +146,8 @@ class RingTask:
         self.params = additional_params
         self.num_cars, self.rl_rows = num_cars, rl_rows
         self.max_speed, self.max_length, self.evaluate = max_speed, max_length, evaluate
-        self.action_space = acceleration_box(additional_params, int(rl_rows.size))
-        self.low = np.asarray(self.action_space.low, dtype=np.float64)
-        self.high = np.asarray(self.action_space.high, dtype=np.float64)
+        self.actions = RingActions(additional_params, int(rl_rows.size))
+        self.action_space = self.actions.space
 
     @property
     def observation_space(self) -> Box:
@@ -130,15 +155,8 @@ class RingTask:
         return Box(low=0.0, high=1.0, shape=(2 * self.num_cars,), dtype=np.float32)
 
     def accelerations(self, actions: Any, clip: bool) -> FloatArray:
-        """Actions ``(B, num_rl)`` as the RL cars' accelerations ``(num_rl, B)``, m/s^2,
-        clipped to the action space when ``clip`` (``env.clip_actions``)."""
-        b = np.shape(actions)[0]
-        if self.low.size == 0:
-            return np.zeros((0, b))
-        a = np.asarray(actions, dtype=np.float64).reshape(-1, self.low.size)
-        if clip:
-            a = np.minimum(np.maximum(a, self.low), self.high)
-        return np.ascontiguousarray(a.T)
+        """:meth:`RingActions.accelerations`: ``(B, num_rl)`` -> ``(num_rl, B)``, m/s^2."""
+        return self.actions.accelerations(actions, clip)
 
     def observe(self, rings: RingBatch) -> FloatArray:
         """Every ring's observation, ``(obs_dim, B)``."""
