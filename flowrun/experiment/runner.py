@@ -193,26 +193,29 @@ class Experiment:
                      rl_actions: Callable[[Any], Any] | None) -> None:  # fmt: skip
         """Step until ``steps``, a collision or the horizon; queued steps are written in
         batches (fewer steps per batch on networks with many cars)."""
-        hooks = self.hooks
+        hooks, rewards, ret = self.hooks, done.rewards, 0.0  # locals: the loop runs per step
         vehicles = max(env.k.vehicle.num_vehicles, 1)
         drain_at = max(1, min(DRAIN_EVERY, DRAIN_VEHICLE_STEPS // vehicles))
-        for step in range(steps):
-            action = rl_actions(obs) if rl_actions is not None else None
-            if hooks is not None:
-                hooks.before_step(env)
-            obs, reward, terminated, truncated, _ = env.step(action)
-            if hooks is not None:
-                hooks.after_step(env)
-            done.ret += reward
-            done.rewards.append(reward)
-            for key, fn in self.custom_callables.items():
-                done.values[key].append(fn(env))
-            if len(env.records) >= drain_at:
-                self._drain(done.sink, done.stats)
-            if self.progress is not None:
-                self.progress(done.run, step + 1)
-            if terminated or truncated:
-                break
+        try:
+            for step in range(steps):
+                action = rl_actions(obs) if rl_actions is not None else None
+                if hooks is not None:
+                    hooks.before_step(env)
+                obs, reward, terminated, truncated, _ = env.step(action)
+                if hooks is not None:
+                    hooks.after_step(env)
+                ret += reward
+                rewards.append(reward)
+                for key, fn in self.custom_callables.items():
+                    done.values[key].append(fn(env))
+                if len(env.records) >= drain_at:
+                    self._drain(done.sink, done.stats)
+                if self.progress is not None:
+                    self.progress(done.run, step + 1)
+                if terminated or truncated:
+                    break
+        finally:
+            done.ret = ret
 
     def _steps(self, num_steps: int | None) -> int:
         if num_steps is not None:
