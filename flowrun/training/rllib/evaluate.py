@@ -28,8 +28,8 @@ from flowrun.training.evaluate import (
     eval_config,
     run_evaluation,
 )
+from flowrun.training.rllib.checkpoints import BEST_CHECKPOINT, FINAL_CHECKPOINT
 from flowrun.training.rllib.deps import require_ray
-from flowrun.training.rllib.train import BEST_CHECKPOINT, FINAL_CHECKPOINT
 from flowrun.training.trainer import train_section
 
 #: Where an RLlib (new API stack) checkpoint keeps its RL modules.

@@ -16,7 +16,6 @@ import json
 import logging
 import math
 import re
-import shutil
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import replace
@@ -24,7 +23,6 @@ from pathlib import Path
 from typing import Any
 
 from flowrun.config.model import ExperimentConfig, TrainConfig
-from flowrun.errors import TrainingError
 from flowrun.rundir.folders import (
     exit_code_of,
     mark_done,
@@ -35,6 +33,13 @@ from flowrun.rundir.folders import (
 from flowrun.rundir.train_state import RunLock
 from flowrun.training.callbacks import TrainProgress
 from flowrun.training.resume import note_resume
+from flowrun.training.rllib.checkpoints import (
+    FINAL_CHECKPOINT,
+    keep_checkpoints,
+    read_state,
+    save_checkpoint,
+    save_tree,
+)
 from flowrun.training.rllib.cluster import RaySession, ray_session
 from flowrun.training.rllib.deps import require_ray
 from flowrun.training.rllib.options import (
@@ -48,9 +53,6 @@ from flowrun.training.trainer import TrainResult, train_section, train_seed
 
 log = logging.getLogger(__name__)
 
-BEST_CHECKPOINT = "best_checkpoint"
-FINAL_CHECKPOINT = "final_checkpoint"
-STATE_FILE = "state.json"
 #: RLlib result entries written to TensorBoard (paths joined with ``/``).
 TB_KEYS = re.compile(
     r"^(env_runners/(episode_(return|len)_(mean|min|max)|num_episodes)"
@@ -144,8 +146,6 @@ def _train(
     happens."""
     from tensorboardX import SummaryWriter
 
-    from flowrun.training.rllib.envs import ENV_NAME, env_config_of, register
-
     tc = train_section(cfg)
     ckpt_dir = run_dir / "checkpoints"
     ckpt_dir.mkdir(exist_ok=True)
@@ -154,22 +154,7 @@ def _train(
     status, wall, iteration, error, exit_code = "failed", 0.0, 0, "", 1
     algo: Any = None
     try:
-        register()
-        iter_steps = steps_per_iteration(
-            build_ppo_config(sections, ENV_NAME, {}, 0, seed, session.cpus)
-        )
-        config = build_ppo_config(
-            sections, ENV_NAME, env_config_of(cfg), env_runners(tc),
-            seed if state is None else seed + done,  # resumed runs see new episodes
-            session.cpus,
-            env_config_of(cfg, evaluate=True) if tc.eval_freq > 0 else None,
-            eval_interval=max(1, round(tc.eval_freq / iter_steps)),
-            eval_episodes=tc.eval_episodes,
-            policies=policies,
-        )  # fmt: skip
-        algo = config.build_algo()
-        if state is not None:
-            algo.restore_from_path(str((ckpt_dir / state["checkpoint"]).resolve()))
+        algo = _build_algo(cfg, sections, seed, session, policies, state, ckpt_dir)
         start = time.monotonic()
         writer = SummaryWriter(str(run_dir / "tensorboard"))
         try:
@@ -179,12 +164,8 @@ def _train(
                 ret = _number(result, "env_runners", "episode_return_mean")
                 score = _number(result, "evaluation", "env_runners", "episode_return_mean")
                 _log_iteration(run_dir, writer, result, iteration, done, ret, score)
-                if score is not None and (best is None or score > best):
-                    best = score
-                    _save(algo, run_dir / BEST_CHECKPOINT)
-                freq = tc.checkpoint_freq
-                if freq > 0 and done // freq > before // freq:
-                    save_checkpoint(algo, ckpt_dir, iteration, done, best)
+                best = keep_checkpoints(algo, run_dir, tc.checkpoint_freq, iteration,
+                                         (before, done), score, best)  # fmt: skip
                 if progress is not None:
                     progress(done, tc.total_timesteps, ret)
                 if should_stop():
@@ -194,7 +175,7 @@ def _train(
                     break
             else:
                 status, exit_code = "complete", 0
-                _save(algo, run_dir / FINAL_CHECKPOINT)
+                save_tree(algo, run_dir / FINAL_CHECKPOINT)
                 save_checkpoint(algo, ckpt_dir, iteration or algo.iteration, done, best)
         except KeyboardInterrupt as err:
             status, exit_code = "interrupted", exit_code_of(err)
@@ -215,6 +196,40 @@ def _train(
         mark_done(run_dir, status, error=error or None, exit_code=exit_code)
     resumed = int(state["timesteps"]) if state else 0
     return TrainResult(run_dir, done, wall, status, resumed)
+
+
+def _build_algo(
+    cfg: ExperimentConfig,
+    sections: dict[str, dict[str, Any]],
+    seed: int,
+    session: RaySession,
+    policies: dict[str, str] | None,
+    state: dict[str, Any] | None,
+    ckpt_dir: Path,
+) -> Any:
+    """RLlib's PPO for the config (evaluating about every ``train.eval_freq`` env steps, in
+    whole iterations), restored from the run's latest checkpoint when resuming (``state``)."""
+    from flowrun.training.rllib.envs import ENV_NAME, env_config_of, register
+
+    tc = train_section(cfg)
+    done = int(state["timesteps"]) if state else 0
+    register()
+    iter_steps = steps_per_iteration(
+        build_ppo_config(sections, ENV_NAME, {}, 0, seed, session.cpus)
+    )
+    config = build_ppo_config(
+        sections, ENV_NAME, env_config_of(cfg), env_runners(tc),
+        seed if state is None else seed + done,  # resumed runs see new episodes
+        session.cpus,
+        env_config_of(cfg, evaluate=True) if tc.eval_freq > 0 else None,
+        eval_interval=max(1, round(tc.eval_freq / iter_steps)),
+        eval_episodes=tc.eval_episodes,
+        policies=policies,
+    )  # fmt: skip
+    algo = config.build_algo()
+    if state is not None:
+        algo.restore_from_path(str((ckpt_dir / state["checkpoint"]).resolve()))
+    return algo
 
 
 def _iterations(algo: Any, tc: TrainConfig, done: int) -> Iterator[dict[str, Any]]:
@@ -281,53 +296,6 @@ def agent_steps(result: dict[str, Any]) -> int:
     if not isinstance(steps, dict):
         return 0
     return int(sum(float(v) for k, v in steps.items() if k != EPISODE_AGENT))
-
-
-def _save(algo: Any, path: Path) -> None:
-    """Save an RLlib checkpoint to ``path``, replacing an earlier one only once it is written."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    shutil.rmtree(tmp, ignore_errors=True)
-    algo.save_to_path(str(tmp.resolve()))
-    old = path.with_name(f".{path.name}.old")
-    if path.exists():
-        path.rename(old)
-    tmp.rename(path)
-    shutil.rmtree(old, ignore_errors=True)
-
-
-def save_checkpoint(
-    algo: Any, ckpt_dir: Path, iteration: int, timesteps: int, best: float | None
-) -> Path:
-    """Save ``checkpoints/iter_<n>/`` and point ``checkpoints/state.json`` at it."""
-    name = f"iter_{int(iteration):06d}"
-    _save(algo, ckpt_dir / name)
-    write_json(
-        ckpt_dir / STATE_FILE,
-        {"checkpoint": name, "iteration": int(iteration), "timesteps": int(timesteps),
-         "best_return": best},
-    )  # fmt: skip
-    return ckpt_dir / name
-
-
-def read_state(run_dir: Path) -> dict[str, Any]:
-    """The latest checkpoint of a run folder (``checkpoints/state.json``).
-
-    Raises:
-        TrainingError: not a run folder, or no checkpoint.
-    """
-    if not (run_dir / "config.yaml").is_file():
-        raise TrainingError(f"{run_dir} is not a run folder (no config.yaml); pass a train run")
-    path = run_dir / "checkpoints" / STATE_FILE
-    try:
-        state = json.loads(path.read_text())
-    except (OSError, ValueError):
-        raise TrainingError(
-            f"{run_dir} has no RLlib checkpoint to resume from (no readable "
-            "checkpoints/state.json); set train.checkpoint_freq or start a new run"
-        ) from None
-    if not (run_dir / "checkpoints" / str(state.get("checkpoint"))).is_dir():
-        raise TrainingError(f"{path} names a checkpoint that is missing: {state.get('checkpoint')}")
-    return dict(state)
 
 
 def _add_version(run_dir: Path, name: str, value: str) -> None:
