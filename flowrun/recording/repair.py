@@ -9,7 +9,7 @@ from pathlib import Path
 from flowrun.errors import RecordingError
 from flowrun.recording.atomic import new_file
 from flowrun.recording.mcap_file import McapWriter
-from flowrun.recording.reader import open_log
+from flowrun.recording.reader import McapLog, open_log
 from flowrun.recording.schema import VEHICLES_TOPIC
 from flowrun.recording.writer import CHUNK_SIZE, PROFILE, media_type
 
@@ -60,8 +60,6 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
     if dst.exists() and dst.resolve() == src.resolve():
         raise RecordingError(f"--repair output {dst} is the input file; choose another path")
     log = open_log(src)
-    messages = frames = 0
-    end_ns: int | None = None
     with new_file(dst, "the repaired copy") as tmp, open(tmp, "wb") as stream:
         writer = McapWriter(
             stream, profile=PROFILE, library="flowrun-repair", chunk_size=CHUNK_SIZE
@@ -70,30 +68,7 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
             writer.add_metadata(name, data, checksum=True)
         for name, blob in log.attachments.items():
             writer.add_attachment(name, media_type(name), blob)
-        schema_ids: dict[int, int] = {}
-        channel_ids: dict[int, int] = {}
-        for schema, channel, message in log.messages():
-            if channel.id not in channel_ids:
-                new_schema = 0
-                if schema is not None:
-                    if schema.id not in schema_ids:
-                        schema_ids[schema.id] = writer.register_schema(
-                            schema.name, schema.encoding, schema.data
-                        )
-                    new_schema = schema_ids[schema.id]
-                channel_ids[channel.id] = writer.register_channel(
-                    channel.topic, channel.message_encoding, new_schema, dict(channel.metadata)
-                )
-            writer.add_message(
-                channel_ids[channel.id],
-                message.log_time,
-                message.data,
-                message.publish_time,
-                message.sequence,
-            )
-            messages += 1
-            frames += channel.topic == VEHICLES_TOPIC
-            end_ns = message.log_time if end_ns is None else max(end_ns, message.log_time)
+        messages, frames, end_ns = _copy_messages(log, writer)
         log.check_data_section()
         if log.damage:  # the copy reads as intact: it says what its source lost
             lost = {"source": src.name, "lost": log.damage.short()}
@@ -112,3 +87,36 @@ def repair(in_path: str | os.PathLike[str], out_path: str | os.PathLike[str]) ->
         end_time=None if end_ns is None else end_ns / 1e9,
         damage=tuple(log.damage.describe()),
     )
+
+
+def _copy_messages(log: McapLog, writer: McapWriter) -> tuple[int, int, int | None]:
+    """Every readable message of ``log`` into ``writer``, its schemas and channels registered
+    anew on first use; returns the messages copied, the vehicle frames among them and the
+    last log time (ns; ``None`` without messages)."""
+    messages = frames = 0
+    end_ns: int | None = None
+    schema_ids: dict[int, int] = {}
+    channel_ids: dict[int, int] = {}
+    for schema, channel, message in log.messages():
+        if channel.id not in channel_ids:
+            new_schema = 0
+            if schema is not None:
+                if schema.id not in schema_ids:
+                    schema_ids[schema.id] = writer.register_schema(
+                        schema.name, schema.encoding, schema.data
+                    )
+                new_schema = schema_ids[schema.id]
+            channel_ids[channel.id] = writer.register_channel(
+                channel.topic, channel.message_encoding, new_schema, dict(channel.metadata)
+            )
+        writer.add_message(
+            channel_ids[channel.id],
+            message.log_time,
+            message.data,
+            message.publish_time,
+            message.sequence,
+        )
+        messages += 1
+        frames += channel.topic == VEHICLES_TOPIC
+        end_ns = message.log_time if end_ns is None else max(end_ns, message.log_time)
+    return messages, frames, end_ns

@@ -115,37 +115,39 @@ class McapRecorder:
             self._writer = McapWriter(
                 self._stream, profile=PROFILE, library="flowrun", chunk_size=chunk_size
             )
-            meta = {str(k): str(v) for k, v in (metadata or {}).items()}
-            self._writer.add_metadata(METADATA_NAME, meta, checksum=True)
-            for name, data in (attachments or {}).items():
-                self._writer.add_attachment(
-                    name, media_type(name), bytes(data), log_time=0, create_time=time.time_ns()
-                )
-            schema_bytes = self._schema_bytes = schema.schema_data()
-            vehicles_schema = self._writer.register_schema(
-                schema.VEHICLES_TYPE, schema.ENCODING, schema_bytes
-            )
-            stats_schema = self._writer.register_schema(
-                schema.STATS_TYPE, schema.ENCODING, schema_bytes
-            )
-            self._vehicles = self._writer.register_channel(
-                schema.VEHICLES_TOPIC, schema.ENCODING, vehicles_schema
-            )
-            self._stats = self._writer.register_channel(
-                schema.STATS_TOPIC, schema.ENCODING, stats_schema
-            )
             self._scene = scene
-            if scene is not None:
-                scene_schema = self._writer.register_schema(
-                    SCENE_TYPE, schema.ENCODING, scene_schema_data()
-                )
-                self._scene_channel = self._writer.register_channel(
-                    SCENE_TOPIC, schema.ENCODING, scene_schema
-                )
+            self._write_header(metadata or {}, attachments or {}, scene)
         except BaseException:
             self._stream.close()
             raise
         self._last_flush = time.monotonic()
+
+    def _write_header(
+        self, metadata: dict[str, str], attachments: dict[str, bytes], scene: SceneEncoder | None
+    ) -> None:
+        """The file's metadata and attachments, then the schemas and channels of the vehicle
+        frames, the step statistics and (with ``scene``) the Foxglove scene."""
+        writer = self._writer
+        meta = {str(k): str(v) for k, v in metadata.items()}
+        writer.add_metadata(METADATA_NAME, meta, checksum=True)
+        for name, data in attachments.items():
+            writer.add_attachment(
+                name, media_type(name), bytes(data), log_time=0, create_time=time.time_ns()
+            )
+        schema_bytes = self._schema_bytes = schema.schema_data()
+        vehicles_schema = writer.register_schema(
+            schema.VEHICLES_TYPE, schema.ENCODING, schema_bytes
+        )
+        stats_schema = writer.register_schema(schema.STATS_TYPE, schema.ENCODING, schema_bytes)
+        self._vehicles = writer.register_channel(
+            schema.VEHICLES_TOPIC, schema.ENCODING, vehicles_schema
+        )
+        self._stats = writer.register_channel(schema.STATS_TOPIC, schema.ENCODING, stats_schema)
+        if scene is not None:
+            scene_schema = writer.register_schema(SCENE_TYPE, schema.ENCODING, scene_schema_data())
+            self._scene_channel = writer.register_channel(
+                SCENE_TOPIC, schema.ENCODING, scene_schema
+            )
 
     def _roster_changed(self, frame: VehicleFrame) -> bool:
         """Whether ids/types/RL flags differ from the last frame's (values, not objects)."""
