@@ -14,6 +14,7 @@ the opposite ``long_length`` edges.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
@@ -92,19 +93,7 @@ def grid_spec(p: dict[str, Any]) -> NetworkSpec:
     v_h, v_v = speed_limits(p["speed_limit"])
     kind = "traffic_light" if p["traffic_lights"] else "priority"
     radius = 2.9 + 3.3 * max(h_lanes, v_lanes)
-    nodes = [Node(f"center{r * cols + c}", c * inner, r * inner, kind, radius)
-             for r in range(rows) for c in range(cols)]  # fmt: skip
-    top_y, right_x = (rows - 1) * inner, (cols - 1) * inner
-    for c in range(cols):
-        x = c * inner
-        nodes += [Node(f"bot_col_short{c}", x, -short), Node(f"bot_col_long{c}", x, -long_),
-                  Node(f"top_col_short{c}", x, top_y + short),
-                  Node(f"top_col_long{c}", x, top_y + long_)]  # fmt: skip
-    for r in range(rows):
-        y = r * inner
-        nodes += [Node(f"left_row_short{r}", -short, y), Node(f"left_row_long{r}", -long_, y),
-                  Node(f"right_row_short{r}", right_x + short, y),
-                  Node(f"right_row_long{r}", right_x + long_, y)]  # fmt: skip
+    nodes = _grid_nodes(rows, cols, (inner, short, long_), kind, radius)
 
     def h(eid: str, a: str, b: str, length: float) -> Edge:
         return Edge(eid, a, b, length, h_lanes, v_h)
@@ -112,26 +101,7 @@ def grid_spec(p: dict[str, Any]) -> NetworkSpec:
     def v(eid: str, a: str, b: str, length: float) -> Edge:
         return Edge(eid, a, b, length, v_lanes, v_v)
 
-    edges: list[Edge] = []
-    for r in range(rows):
-        for c in range(1, cols):
-            west, east = f"center{r * cols + c - 1}", f"center{r * cols + c}"
-            edges += [h(f"bot{r}_{c}", west, east, inner), h(f"top{r}_{c}", east, west, inner)]
-        first, last = f"center{r * cols}", f"center{r * cols + cols - 1}"
-        edges += [h(f"bot{r}_0", f"left_row_short{r}", first, short),
-                  h(f"top{r}_0", first, f"left_row_long{r}", long_),
-                  h(f"top{r}_{cols}", f"right_row_short{r}", last, short),
-                  h(f"bot{r}_{cols}", last, f"right_row_long{r}", long_)]  # fmt: skip
-    for c in range(cols):
-        for r in range(1, rows):
-            south, north = f"center{(r - 1) * cols + c}", f"center{r * cols + c}"
-            edges += [v(f"right{r}_{c}", south, north, inner),
-                      v(f"left{r}_{c}", north, south, inner)]  # fmt: skip
-        bottom, top = f"center{c}", f"center{(rows - 1) * cols + c}"
-        edges += [v(f"right0_{c}", f"bot_col_short{c}", bottom, short),
-                  v(f"left0_{c}", bottom, f"bot_col_long{c}", long_),
-                  v(f"left{rows}_{c}", f"top_col_short{c}", top, short),
-                  v(f"right{rows}_{c}", top, f"top_col_long{c}", long_)]  # fmt: skip
+    edges = _grid_edges(rows, cols, (inner, short, long_), h, v)
     lines = straight_lines(rows, cols)
     connections = tuple(
         Connection(a, b, lane, lane)
@@ -152,6 +122,63 @@ def grid_spec(p: dict[str, Any]) -> NetworkSpec:
         main_route=lines[0],
         extra={"rows": rows, "cols": cols},
     )
+
+
+def _grid_nodes(
+    rows: int, cols: int, lengths: tuple[float, float, float], kind: str, radius: float
+) -> list[Node]:
+    """The intersections ``center<i>`` (``kind``, junction ``radius`` m), then the ends of
+    the short (inflow) and long (outflow) edges of each column and row; ``lengths``: inner,
+    short and long edge lengths, m."""
+    inner, short, long_ = lengths
+    nodes = [Node(f"center{r * cols + c}", c * inner, r * inner, kind, radius)
+             for r in range(rows) for c in range(cols)]  # fmt: skip
+    top_y, right_x = (rows - 1) * inner, (cols - 1) * inner
+    for c in range(cols):
+        x = c * inner
+        nodes += [Node(f"bot_col_short{c}", x, -short), Node(f"bot_col_long{c}", x, -long_),
+                  Node(f"top_col_short{c}", x, top_y + short),
+                  Node(f"top_col_long{c}", x, top_y + long_)]  # fmt: skip
+    for r in range(rows):
+        y = r * inner
+        nodes += [Node(f"left_row_short{r}", -short, y), Node(f"left_row_long{r}", -long_, y),
+                  Node(f"right_row_short{r}", right_x + short, y),
+                  Node(f"right_row_long{r}", right_x + long_, y)]  # fmt: skip
+    return nodes
+
+
+def _grid_edges(
+    rows: int,
+    cols: int,
+    lengths: tuple[float, float, float],
+    h: Callable[[str, str, str, float], Edge],
+    v: Callable[[str, str, str, float], Edge],
+) -> list[Edge]:
+    """The rows' edges (``h``: horizontal lanes and speed), then the columns' (``v``): both
+    directions between neighbouring intersections, an inflow (short) and an outflow (long)
+    edge at each end; ``lengths``: inner, short and long edge lengths, m."""
+    inner, short, long_ = lengths
+    edges: list[Edge] = []
+    for r in range(rows):
+        for c in range(1, cols):
+            west, east = f"center{r * cols + c - 1}", f"center{r * cols + c}"
+            edges += [h(f"bot{r}_{c}", west, east, inner), h(f"top{r}_{c}", east, west, inner)]
+        first, last = f"center{r * cols}", f"center{r * cols + cols - 1}"
+        edges += [h(f"bot{r}_0", f"left_row_short{r}", first, short),
+                  h(f"top{r}_0", first, f"left_row_long{r}", long_),
+                  h(f"top{r}_{cols}", f"right_row_short{r}", last, short),
+                  h(f"bot{r}_{cols}", last, f"right_row_long{r}", long_)]  # fmt: skip
+    for c in range(cols):
+        for r in range(1, rows):
+            south, north = f"center{(r - 1) * cols + c}", f"center{r * cols + c}"
+            edges += [v(f"right{r}_{c}", south, north, inner),
+                      v(f"left{r}_{c}", north, south, inner)]  # fmt: skip
+        bottom, top = f"center{c}", f"center{(rows - 1) * cols + c}"
+        edges += [v(f"right0_{c}", f"bot_col_short{c}", bottom, short),
+                  v(f"left0_{c}", bottom, f"bot_col_long{c}", long_),
+                  v(f"left{rows}_{c}", f"top_col_short{c}", top, short),
+                  v(f"right{rows}_{c}", top, f"top_col_long{c}", long_)]  # fmt: skip
+    return edges
 
 
 def flow_edge_starts(rows: int, cols: int) -> dict[str, float]:
