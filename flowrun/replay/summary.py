@@ -135,21 +135,10 @@ def summarize(
         # no need to decode the (large) vehicle frames beyond the first one.
         series = series_from_stats(log, stats, start_s, end_s)
     s = series or speed_series(log, start_s=start_s, end_s=end_s, vehicles=vehicles)
-    collisions = sum(st.collisions for st in stats)
-    teleports = sum(st.teleports for st in stats)
-    rewards = [st.reward for st in stats if math.isfinite(st.reward)]
-    reward_sum = float(sum(rewards))
-    finite_rewards = len(rewards)
     meta = log.metadata
-    sims_per_step = _positive_int(meta.get("sims_per_step"))
-    record_every = _positive_int(meta.get("record_every"))
-    episode_return = reward_sum * record_every / sims_per_step if finite_rewards else None
     n = s.times.size
-    first = float(s.times[0]) if n else math.nan
-    last = float(s.times[-1]) if n else math.nan
-    interval = float(np.median(np.diff(s.times))) if n > 1 else 0.0
+    first, last, duration = _time_span(s.times)
     has_speed = s.count > 0
-    duration = (last - first + interval) if n else 0.0
     departed = sum(st.departed for st in stats)
     arrived = sum(st.arrived for st in stats)
     return ReplaySummary(
@@ -168,9 +157,9 @@ def summarize(
         min_speed=float(np.nanmin(s.min[has_speed])) if has_speed.any() else math.nan,
         max_speed=float(np.nanmax(s.max[has_speed])) if has_speed.any() else math.nan,
         speed_std=_nanmean(s.std),
-        collisions=collisions,
-        teleports=teleports,
-        episode_return=episode_return,
+        collisions=sum(st.collisions for st in stats),
+        teleports=sum(st.teleports for st in stats),
+        episode_return=_episode_return(stats, meta),
         salvaged=log.salvaged,
         recovered_bytes=log.recovered_bytes,
         departed=departed,
@@ -180,6 +169,28 @@ def summarize(
         damage=_damage(log),
         lane_changes=sum(st.lane_changes for st in stats),
     )
+
+
+def _time_span(times: np.ndarray) -> tuple[float, float, float]:
+    """First and last logged time and the time the logged steps cover (one step interval,
+    the median, per logged step), s; ``nan``, ``nan``, 0 without steps."""
+    n = times.size
+    if not n:
+        return math.nan, math.nan, 0.0
+    first, last = float(times[0]), float(times[-1])
+    interval = float(np.median(np.diff(times))) if n > 1 else 0.0
+    return first, last, last - first + interval
+
+
+def _episode_return(stats: list[StepStats], meta: dict[str, str]) -> float | None:
+    """The summed finite rewards times ``record_every`` over ``sims_per_step`` (each RL
+    step's reward is logged on each of its simulation steps); ``None`` without one."""
+    rewards = [st.reward for st in stats if math.isfinite(st.reward)]
+    if not rewards:
+        return None
+    sims_per_step = _positive_int(meta.get("sims_per_step"))
+    record_every = _positive_int(meta.get("record_every"))
+    return float(sum(rewards)) * record_every / sims_per_step
 
 
 def _damage(log: McapLog) -> str:
