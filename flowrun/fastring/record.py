@@ -111,7 +111,7 @@ def record_episode(
     """
     plan = ring_plan(replace(cfg, sim=replace(cfg.sim, backend="numpy")))
     episodes = RingEpisodes(plan, 1)
-    rings, task = episodes.rings, episodes.task
+    rings = episodes.rings
     pending: list[tuple[VehicleFrame, StepStats]] = []
     writer = _FrameWriter(episodes, lambda f, s: pending.append((f, s)))
     rings.physics.keep_accel = True
@@ -125,28 +125,41 @@ def record_episode(
         "backend": "numpy",
     }
     attachments = {"config.yaml": dump_config(cfg).encode()}
-    total = 0.0
     with McapRecorder(
         path, metadata=meta, attachments=attachments, record_every=record_every
     ) as recorder:
         for frame, stats in pending:
             recorder.write(frame, stats)
         writer.sink = recorder.write
-        for _ in range(plan.horizon):
-            if policy is None:
-                crashed = rings.step(None)
-                reward = 0.0
-            else:
-                applied = task.clip(np.asarray(policy(obs[0]), dtype=np.float64).reshape(1, -1))
-                crashed = rings.step(applied)
-                reward = float(task.rewards(rings, applied, crashed)[0])
-                obs = task.observe(rings)
-            total += reward
-            writer.reward = reward
-            assert rings.state is not None
-            writer(rings.state, crashed)
-            if crashed[0]:
-                break
+        return _drive(episodes, plan.horizon, obs, policy, writer)
+
+
+def _drive(
+    episodes: RingEpisodes,
+    horizon: int,
+    obs: np.ndarray,
+    policy: Policy | None,
+    writer: _FrameWriter,
+) -> float:
+    """Step the one ring up to ``horizon`` env steps or a collision, each step logged by
+    ``writer``; the episode's return."""
+    rings, task = episodes.rings, episodes.task
+    total = 0.0
+    for _ in range(horizon):
+        if policy is None:
+            crashed = rings.step(None)
+            reward = 0.0
+        else:
+            applied = task.clip(np.asarray(policy(obs[0]), dtype=np.float64).reshape(1, -1))
+            crashed = rings.step(applied)
+            reward = float(task.rewards(rings, applied, crashed)[0])
+            obs = task.observe(rings)
+        total += reward
+        writer.reward = reward
+        assert rings.state is not None
+        writer(rings.state, crashed)
+        if crashed[0]:
+            break
     return total
 
 
