@@ -233,11 +233,31 @@ class RingPhysics:
             z: standard normals of this step, ``(M, B)`` (see :class:`NoiseStreams`).
             rl_accel: accelerations of the RL cars, ``(num_rl, B)``; ``None``: SUMO drives them.
         """
+        dt = self.plan.dt
+        b = s.length.size
+        vl = s.of_leader(s.speed)
+        nxt = self._human_speeds(s, z, vl, b)
+        if self.rl.size:
+            self._rl_speeds(s, rl_accel, vl, nxt, b)
+        s.speed = nxt
+        s.odo = s.odo + nxt * dt
+        u = s.u = s.start + s.odo
+        headway = s.of_leader(u)
+        headway -= u
+        headway += s.offset
+        s.headway = headway
+        s.steps = s.steps + 1
+        if headway.min() >= -NUMERICAL_EPS:
+            return np.zeros(b, dtype=bool)
+        return reported_collisions(s, headway < -NUMERICAL_EPS)
+
+    def _human_speeds(self, s: RingState, z: FloatArray, vl: FloatArray, b: int) -> FloatArray:
+        """Every car's next speed, m/s, ``(N, B)``: the human cars' from their controllers
+        (noise from ``z``, capped by SUMO's safe speed where their speed mode says so); the
+        RL cars' rows are left for :meth:`_rl_speeds`. ``vl``: every car's leader's speed."""
         p = self.plan
         dt, limit = p.dt, p.speed_limit
-        b = s.length.size
         v = s.speed
-        vl = s.of_leader(v)
         fh = s.of_follower(s.headway)
         fv = s.of_follower(v)
         nxt = np.empty_like(v)
@@ -262,35 +282,31 @@ class RingPhysics:
         if self.capped_humans.size:
             rows = self.capped_humans
             nxt[rows] = np.minimum(nxt[rows], self.safe_speed(s, rows, vl))
-        rl = self.rl_rows
-        if self.rl.size:
-            c = self._rl_params
-            v_safe = self.safe_speed(s, rl, vl, c)
-            if rl_accel is None:
-                nxt[rl] = sumo_driven_speed(
-                    v[rl], v_safe, accel=c["accel"], decel=c["decel"],
-                    emergency_decel=c["emergency_decel"], max_speed=c["max_speed"],
-                    lane_max=c["des_speed"], dt=dt,
-                )  # fmt: skip
-            elif self.rl_all_capped:
-                nxt[rl] = np.minimum(commanded_speed(v[rl], rl_accel, dt, limit), v_safe)
-            else:
-                target = commanded_speed(v[rl], rl_accel, dt, limit)
-                cap = p.safe_cap[self.rl][:, None]
-                nxt[rl] = np.where(cap, np.minimum(target, v_safe), target)
-        if self.keep_accel and self.rl.size:
+        return nxt
+
+    def _rl_speeds(
+        self, s: RingState, rl_accel: FloatArray | None, vl: FloatArray, nxt: FloatArray, b: int
+    ) -> None:
+        """The RL cars' next speeds into ``nxt``: SUMO's own driving without commands, else
+        the commanded accelerations, capped by the safe speed where the speed mode says so."""
+        p = self.plan
+        dt, limit = p.dt, p.speed_limit
+        v, rl, c = s.speed, self.rl_rows, self._rl_params
+        v_safe = self.safe_speed(s, rl, vl, c)
+        if rl_accel is None:
+            nxt[rl] = sumo_driven_speed(
+                v[rl], v_safe, accel=c["accel"], decel=c["decel"],
+                emergency_decel=c["emergency_decel"], max_speed=c["max_speed"],
+                lane_max=c["des_speed"], dt=dt,
+            )  # fmt: skip
+        elif self.rl_all_capped:
+            nxt[rl] = np.minimum(commanded_speed(v[rl], rl_accel, dt, limit), v_safe)
+        else:
+            target = commanded_speed(v[rl], rl_accel, dt, limit)
+            cap = p.safe_cap[self.rl][:, None]
+            nxt[rl] = np.where(cap, np.minimum(target, v_safe), target)
+        if self.keep_accel:
             self._accel_rows(b)[rl] = np.nan if rl_accel is None else rl_accel
-        s.speed = nxt
-        s.odo = s.odo + nxt * dt
-        u = s.u = s.start + s.odo
-        headway = s.of_leader(u)
-        headway -= u
-        headway += s.offset
-        s.headway = headway
-        s.steps = s.steps + 1
-        if headway.min() >= -NUMERICAL_EPS:
-            return np.zeros(b, dtype=bool)
-        return reported_collisions(s, headway < -NUMERICAL_EPS)
 
 
 def reported_collisions(s: RingState, overlap: BoolArray) -> BoolArray:
