@@ -107,3 +107,46 @@ def test_unknown_algorithm_says_which_exist(tmp_path: Path) -> None:
     result = runner.invoke(app, ["validate", str(CONFIG), "--set", "train.algorithm=ASR"])
     assert result.exit_code == 1
     assert "train.algorithm" in result.output and "ARS" in result.output
+
+
+def test_common_random_numbers_give_every_candidate_the_updates_episode() -> None:
+    from sb3_contrib import ARS as Ars
+
+    from flowrun.loading.loader import load_config
+    from flowrun.training.ars import WorkerEnv
+    from flowrun.training.numpy_predict import CandidateSeeds, _Candidates
+    from flowrun.training.vecenv import EnvFactory
+
+    cfg = load_config(CONFIG, ARS)  # ring lengths drawn at each reset from the env's generator
+    spec = WorkerEnv(EnvFactory(cfg), 7, False)
+    env = spec.factory()
+    try:
+        model = Ars("LinearPolicy", env, n_delta=2, n_top=1, device="cpu")
+    finally:
+        env.close()
+    worker = _Candidates(spec, model.policy, 1)
+    try:
+        weights = model.weights.cpu()
+        first = worker.play(weights)  # the worker's seed 7
+        moved_on = worker.play(weights)  # its generator continues: another ring
+        assert moved_on != first
+        worker.seed_each = 20_003
+        shared = worker.play(weights)
+        assert worker.play(weights) == shared  # the same weights, the same episode
+        assert shared != moved_on
+    finally:
+        worker.env.close()
+    seeds = CandidateSeeds(20_000, update=5)  # a resumed run continues its updates' seeds
+    assert [seeds.next(), seeds.next()] == [20_005, 20_006]
+
+
+def test_common_random_numbers_train_reproducibly_and_only_for_ars(tmp_path: Path) -> None:
+    crn = ("train.common_random_numbers=true",)
+    run = _train(tmp_path / "a", seed=4, extra=crn)
+    assert _weights(run) != _weights(_train(tmp_path / "b", seed=4))
+    assert _weights(run) == _weights(_train(tmp_path / "c", seed=4, extra=crn))
+    result = runner.invoke(app, ["validate", str(CONFIG), "--set",
+                                 "train.common_random_numbers=true"])  # fmt: skip
+    assert result.exit_code == 1
+    assert "train.common_random_numbers" in result.output
+    assert "an ARS setting" in result.output and "not one of PPO" in result.output

@@ -48,6 +48,9 @@ class TrainConfig:
             ``speed_ratio`` (default: the worst episode's last-half mean speed relative to the
             all-human baseline of the same episode) or ``return`` (the mean evaluation-mode
             return: a benchmark's own metric, e.g. the whole episode's mean speed).
+        common_random_numbers: ARS only: every candidate of an update plays the same seeded
+            episode(s) (seed ``seed + 20000 + update``), so the candidates are ranked by their
+            weights rather than by the traffic's own randomness (common random numbers).
         checkpoint_freq: save a checkpoint every this many environment steps (0 = never).
         backend: ``sb3`` (stable-baselines3, default) or ``rllib`` (Ray RLlib).
         num_env_runners: RLlib only: env runners (one process and one SUMO each); ``None``
@@ -71,6 +74,7 @@ class TrainConfig:
     eval_episodes: int = 1
     eval_backend: str = "sumo"
     best_by: str = "speed_ratio"
+    common_random_numbers: bool = False
     checkpoint_freq: int = 0
     backend: str = "sb3"
     num_env_runners: int | None = None

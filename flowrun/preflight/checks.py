@@ -79,6 +79,20 @@ def preflight(cfg: ExperimentConfig, loc: Locations) -> None:
         _check_hyperparam_names(cfg, loc)
         _check_rllib(cfg, loc)
         _check_numpy_backends(cfg, loc)
+        _check_ars_only(cfg, loc)
+
+
+def _check_ars_only(cfg: ExperimentConfig, loc: Locations) -> None:
+    """``train.common_random_numbers`` is an ARS setting: refused with another algorithm."""
+    tc = cfg.train
+    if tc is not None and tc.common_random_numbers and (
+        tc.algorithm != "ARS" or tc.backend != "sb3"
+    ):
+        raise loc.error(
+            f"common_random_numbers is an ARS setting (candidates that share their episodes), "
+            f"not one of {tc.algorithm} on {tc.backend}; remove it or use algorithm: ARS",
+            ("train", "common_random_numbers"),
+        )
 
 
 def _check_numpy_backends(cfg: ExperimentConfig, loc: Locations) -> None:

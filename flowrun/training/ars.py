@@ -31,7 +31,7 @@ from stable_baselines3.common.type_aliases import MaybeCallback
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 from flowrun.config.model import ExperimentConfig
-from flowrun.training.numpy_predict import LeanAsyncEval
+from flowrun.training.numpy_predict import CandidateSeeds, LeanAsyncEval
 from flowrun.training.vecenv import EnvFactory
 
 SelfARS = TypeVar("SelfARS", bound="ARS")
@@ -116,7 +116,9 @@ def async_eval(
     """``n_workers`` processes evaluating ``model``'s candidates (forkserver, as the envs).
 
     Worker ``rank``'s env is seeded ``seed + rank``; with ``normalize`` the workers start from
-    the model's observation statistics (a resumed run's included).
+    the model's observation statistics (a resumed run's included). With
+    ``train.common_random_numbers`` every candidate of update ``k`` resets its env with seed
+    ``seed + 20000 + k``.
     """
     workers: list[WorkerEnv] = [
         WorkerEnv(
@@ -127,7 +129,12 @@ def async_eval(
         for rank in range(n_workers)
     ]
     # the workers play the episodes on their env with a numpy copy of each candidate
-    evaluator = LeanAsyncEval(workers, model.policy, n_eval_episodes=model.n_eval_episodes)
+    tc = cfg.train
+    shared = tc is not None and tc.common_random_numbers
+    evaluator = LeanAsyncEval(
+        workers, model.policy, n_eval_episodes=model.n_eval_episodes,
+        episode_seeds=CandidateSeeds(seed + 20_000, model._n_updates) if shared else None,
+    )
     stats = model.get_vec_normalize_env()
     if normalize and stats is not None and isinstance(stats.obs_rms, RunningMeanStd):
         evaluator.sync_obs_rms(stats.obs_rms.copy())

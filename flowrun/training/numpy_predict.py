@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import multiprocessing as mp
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
@@ -129,8 +130,13 @@ class LeanAsyncEval(AsyncEval):
     """
 
     def __init__(
-        self, workers: Sequence[WorkerSpec], policy: Any, n_eval_episodes: int = 1
+        self,
+        workers: Sequence[WorkerSpec],
+        policy: Any,
+        n_eval_episodes: int = 1,
+        episode_seeds: CandidateSeeds | None = None,
     ) -> None:
+        self.episode_seeds = episode_seeds
         ctx = mp.get_context("forkserver")
         self.waiting = False
         self.closed = False
@@ -146,6 +152,28 @@ class LeanAsyncEval(AsyncEval):
             self.processes.append(process)
             child.close()
 
+    def send_jobs(self, candidate_weights: Any, pop_size: int) -> None:
+        """``AsyncEval.send_jobs``; with ``episode_seeds`` every candidate of this update
+        first resets its env with the update's seed."""
+        if self.episode_seeds is not None:
+            seed = self.episode_seeds.next()
+            for remote in self.remotes:
+                remote.send(("seed_each", seed))
+        super().send_jobs(candidate_weights, pop_size)
+
+
+@dataclass
+class CandidateSeeds:
+    """The seeds of successive ARS updates' shared episodes: ``base + update``."""
+
+    base: int
+    update: int = 0
+
+    def next(self) -> int:
+        """This update's seed (then the next update's)."""
+        self.update += 1
+        return self.base + self.update - 1
+
 
 class _Candidates:
     """One ``LeanAsyncEval`` worker's env, statistics and policy."""
@@ -153,6 +181,7 @@ class _Candidates:
     def __init__(self, spec: WorkerSpec, policy: Any, episodes: int) -> None:
         self.env = spec.factory()
         self.next_seed: int | None = spec.seed
+        self.seed_each: int | None = None  # every candidate's first reset (common numbers)
         self.options: dict[str, Any] | None = None
         self.predictor = NumpyPredictor(policy)
         self.episodes = episodes
@@ -179,6 +208,8 @@ class _Candidates:
         self.predictor.load_from_vector(weights)
         returns: list[float] = []
         lengths: list[int] = []
+        if self.seed_each is not None:
+            self.next_seed = self.seed_each
         obs = self.reset()
         while len(returns) < self.episodes:
             action, _ = self.predictor.predict(obs)
@@ -215,6 +246,8 @@ def _lean_worker(remote: Any, parent: Any, payload: CloudpickleWrapper) -> None:
             break
         if cmd == "eval":
             remote.send([(index, worker.play(weights.cpu())) for index, weights in data])
+        elif cmd == "seed_each":
+            worker.seed_each = data
         elif cmd == "seed":
             worker.next_seed = data
             remote.send([data])
