@@ -201,6 +201,27 @@ class MinicityRouter(Router):
         self._forced[[i for e, i in lanes.edge_pos.items() if e in self.FORCED]] = True
         self._plan = {}
 
+    def _extend(
+        self,
+        ids: Sequence[str],
+        rows: list[int],
+        kept: list[tuple[str, ...]],
+        hops: list[list[str]],
+        ends: list[str],
+    ) -> tuple[list[int], list[list[str]]]:
+        """The cars' kept routes extended by their hops (a car at a dead end gets none), and
+        each car's plan: its route, the lane it ends on and the edge to extend it on next."""
+        out_rows, out_routes = [], []
+        for row, route, tail, end_lane in zip(rows, kept, hops, ends, strict=True):
+            new = (*route, *tail[1:])
+            if len(new) == 1:
+                continue  # a dead end: nothing to add
+            at = trigger_index(new, self._lengths, self.lookahead, self.min_edge_length)
+            self._plan[ids[row]] = (new, end_lane, self._edge_pos.get(new[at], -1))
+            out_rows.append(row)
+            out_routes.append(list(new))
+        return out_rows, out_routes
+
     def _kept_route(
         self, veh_id: str, edge: str, lane_no: int, at_end: bool, at_trigger: bool
     ) -> tuple[tuple[str, ...], str] | None:
@@ -273,15 +294,7 @@ class MinicityRouter(Router):
             starts, self._successors, self._lengths, rng,
             self.min_edge_length, self.lookahead, base, least,
         )  # fmt: skip
-        out_rows, out_routes = [], []
-        for row, route, tail, end_lane in zip(due_rows, kept, hops, ends, strict=True):
-            new = (*route, *tail[1:])
-            if len(new) == 1:
-                continue  # a dead end: nothing to add
-            at = trigger_index(new, self._lengths, self.lookahead, self.min_edge_length)
-            plan[ids[row]] = (new, end_lane, self._edge_pos.get(new[at], -1))
-            out_rows.append(row)
-            out_routes.append(list(new))
+        out_rows, out_routes = self._extend(ids, due_rows, kept, hops, ends)
         if len(plan) > 2 * len(ids) + 64:  # forget cars that left
             live = set(ids)
             self._plan = {v: p for v, p in plan.items() if v in live}
