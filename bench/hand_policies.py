@@ -13,7 +13,8 @@ being the episode's return. The benchmark's own baseline runs on the same seeds.
   slowest-capped AV of every cell of edges ``E`` at ``v`` m/s (each step's change is
   ``v - its cap``, clipped to the action space) and releases the AVs elsewhere (+1.5 m/s a
   step up to the 23 m/s speed limit); ``meter v @ E if n > N`` does so only while more than
-  ``N`` cars are on the 2-lane edge 4 (the mean over the last 10 steps), else releases.
+  ``N`` cars are on the 2-lane edge 4 (the mean over the last 10 steps), else releases
+  (``until n <= M``: once on, until at most ``M`` cars are there).
   ``--capacity`` adds the all-human outflow at inflows 1,500-2,500 veh/h (the baseline's
   set-up, the metric's window).
 * grid0 (``TrafficLightGridBenchmarkEnv``): an action > 0 switches a light through 3 s of
@@ -57,6 +58,12 @@ def cap_deltas(min_caps: np.ndarray, targets: np.ndarray, low: float, high: floa
     delta = np.clip(targets - min_caps, low, high)
     delta = np.where(np.isnan(min_caps), 0.0, delta)
     return np.where(np.isnan(targets), high, delta)
+
+
+def meter_engaged(engaged: bool, crowd: float, on: float, off: float) -> bool:
+    """Whether the bottleneck meter holds the AVs back: once ``crowd`` (cars on edge 4) is above
+    ``on``, until it is at most ``off``."""
+    return crowd > on or (engaged and crowd > off)
 
 
 def fixed_time_switch(step: int, period: int, offsets: np.ndarray) -> np.ndarray:
@@ -107,17 +114,27 @@ def _zone_targets(env: Any, edges: str, speed: float) -> np.ndarray:
     return targets
 
 
-def cap_policy(edges: str, speed: float, crowd: float | None = None) -> Policy:
-    """``cap v @ E`` (always) or ``meter v @ E if n > N`` (``crowd`` = N)."""
+def cap_policy(
+    edges: str, speed: float, crowd: float | None = None, release: float | None = None
+) -> Policy:
+    """``cap v @ E`` (always) or ``meter v @ E if n > N`` (``crowd`` = N; with ``release`` =
+    M, ``... until n <= M``)."""
 
     def build(env: Any) -> Callable[[Any], Any]:
         space = env.action_space
         on = _zone_targets(env, edges, speed)
         off = np.full_like(on, np.nan)
+        engaged = [crowd is None]
 
         def act(_obs: Any) -> Any:
-            busy = crowd is None or float(np.mean(env.smoothed_num)) > crowd
-            return cap_deltas(_min_caps(env), on if busy else off, space.low[0], space.high[0])
+            if crowd is not None:
+                n = float(np.mean(env.smoothed_num))
+                engaged[0] = meter_engaged(
+                    engaged[0], n, crowd, crowd if release is None else release
+                )
+            return cap_deltas(
+                _min_caps(env), on if engaged[0] else off, space.low[0], space.high[0]
+            )
 
         return act
 
@@ -134,10 +151,14 @@ def bottleneck_policies(wide: bool) -> dict[str, Policy]:
     meters = [("23", v, n) for v in (0.01, 0.5, 1.0, 2.0, 3.0) for n in (8, 10, 12, 14, 16)]
     meters += [(zone, 1.0, n) for zone in ("2", "3") for n in (10, 12)]
     if not wide:
-        meters = [("23", 0.01, 12), ("23", 0.5, 12), ("23", 1.0, 10), ("23", 1.0, 12),
-                  ("23", 1.0, 14), ("23", 2.0, 10)]  # fmt: skip
+        meters = [("23", 0.01, 12), ("23", 0.5, 12), ("23", 2.0, 10)]
+        meters += [("23", 1.0, n) for n in (10, 11, 12, 13, 14)]
     for zone, v, n in meters:
         out[f"meter {v:g} @ {'+'.join(zone)} if n > {n}"] = cap_policy(zone, v, crowd=n)
+    for v, n, m in ((1.0, 12, 8), (1.0, 12, 6), (1.0, 10, 6), (1.0, 14, 8), (0.5, 12, 8)) * wide:
+        out[f"meter {v:g} @ 2+3 if n > {n} until n <= {m}"] = cap_policy("23", v, n, release=m)
+    if wide:
+        out["meter 0.01 @ 2+3+4 if n > 10"] = cap_policy("234", 0.01, crowd=10)
     return out
 
 

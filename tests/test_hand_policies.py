@@ -47,3 +47,11 @@ def test_queue_rule_switches_only_a_settled_green_facing_a_longer_red_queue() ->
     yellow = np.array([0.0, 0.0, 0.0, 1.0])
     # light 0 switches; 1 has not held its green long enough; 2 has no longer queue; 3 is yellow
     assert list(hp.queue_switch(green, red, since, yellow, 8.0)) == [1.0, -1.0, -1.0, -1.0]
+
+
+def test_meter_engages_above_its_threshold_and_releases_at_or_below_the_lower_one() -> None:
+    assert hp.meter_engaged(False, 12.5, 12.0, 8.0)
+    assert not hp.meter_engaged(False, 10.0, 12.0, 8.0)  # not yet engaged: stays off
+    assert hp.meter_engaged(True, 10.0, 12.0, 8.0)  # engaged: holds until 8
+    assert not hp.meter_engaged(True, 8.0, 12.0, 8.0)
+    assert not hp.meter_engaged(True, 12.0, 12.0, 12.0)  # no hysteresis: on above 12 only
