@@ -50,10 +50,13 @@ def idm_accel(
     Returns:
         accelerations, m/s^2.
     """
-    s_star = s0 + np.maximum(0.0, v * T + v * (v - v_lead) / (2.0 * math.sqrt(a * b)))
+    # (a product with a factor of exactly 1 is skipped: x * 1.0 is x, bit for bit)
+    headway_term = v if T == 1.0 else v * T
+    s_star = s0 + np.maximum(0.0, headway_term + v * (v - v_lead) / (2.0 * math.sqrt(a * b)))
     # Without a leader h = inf, so s*/h = 0 and the interaction term vanishes (Flow: s* = 0).
     interaction = np.square(s_star / np.maximum(h, MIN_GAP))
-    return a * (1.0 - (v / v0) ** delta - interaction)
+    accel = 1.0 - (v / v0) ** delta - interaction
+    return accel if a == 1.0 else a * accel
 
 
 def cosine_optimal_velocity(h: FloatArray, *, h_st: float, h_go: float, v_max: float) -> FloatArray:

@@ -27,7 +27,8 @@ class LaneTable:
         key: lane id -> key.
         edge_names: edge ids, internal ones included (``edge_index`` points here).
         edge_index, lane_index, start, speed_limit, length, internal: per lane key.
-        alone: per lane key, whether it is its edge's only lane (and False at key -1).
+        alone: per lane key, whether it is its edge's only lane (and False at key -1);
+            ``alone_l`` the same as a list.
         edge_starts: every edge's start along the network, m (internal edges included).
     """
 
@@ -52,6 +53,7 @@ class LaneTable:
         #: per lane key, whether the lane is its edge's only one; one more entry (False) at
         #: the end, so that key -1 (none) reads False
         self.alone = np.append(counts[self.edge_index] == 1, False)
+        self.alone_l: list[bool] = self.alone.tolist()
         #: every edge (internal ones included): (number of lanes, length m, speed limit m/s),
         #: the longest / fastest of its lanes
         self.edge_facts: dict[str, tuple[int, float, float]] = {}

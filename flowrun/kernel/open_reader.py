@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from flowrun.kernel.following import Neighbours, neighbours
+from flowrun.kernel.following import SMALL, Neighbours, neighbours, neighbours_few
 from flowrun.kernel.lane_graph import LaneGraph
 from flowrun.kernel.open_road import Following
 from flowrun.kernel.state import OpenState
@@ -80,6 +80,8 @@ class OpenReader:
         self._step_ms = round(dt * 1000)
         self._prev_key = NO_ROWS
         self._prev_pos = np.zeros(0)
+        #: ContinuousRouter must look at the cars again (see :meth:`route`)
+        self._route_due = True
 
     def read(self, first: bool, removed: list[str]) -> OpenState:
         """This step's state: follow the population (``removed``: the cars taken out since the
@@ -112,10 +114,12 @@ class OpenReader:
             return
         state = self.last
         assert state is not None
-        _ = state.edge_index  # the lanes and what follows, read before any car is rerouted
+        _ = state.lane_key  # the lanes and what follows, read before any car is rerouted
         if self.read_xy_each_step:
             _ = state.xy
-        if self.table.any_continuous:  # before the look-ahead, which follows the new route
+        # before the look-ahead, which follows the new route; skipped while no car changed
+        # lanes, no route's end changed and no car was due at the last check (none is now)
+        if self.table.any_continuous and (self._route_due or self.rows_changed):
             self._route_continuously(state.edge_index)
         if routers:  # routers of whole groups (e.g. MinicityRouter), also before it
             routers.step(vk, self.lanes)
@@ -135,18 +139,29 @@ class OpenReader:
         """
         fast, lanes, ids = self.fast, self.lanes, self.table.ids
         n = len(ids)
-        pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
         prev_key = self._prev_key
         if self._place_ms == self._now_ms - self._step_ms and prev_key.size == n:
-            # (a new row's key is -1: alone[-1] is False)
-            same = (pos == self._prev_pos + speed * self.dt) & lanes.alone[prev_key]
             keys = prev_key.copy()
-            moved = (~same).nonzero()[0].tolist()  # (np.flatnonzero: a Python layer)
+            # (a new row's key is -1: alone[-1] is False)
+            if n <= SMALL:  # the same test on lists: fewer numpy calls (a per-call cost)
+                pos_l = list(map(fast.get_lane_position, ids))
+                pos = np.array(pos_l, np.float64)
+                dt, alone = self.dt, lanes.alone_l
+                moved = [r for r, p, q, v, k in zip(range(n), pos_l, self._prev_pos.tolist(),
+                                                    speed.tolist(), prev_key.tolist(), strict=True)
+                         if not (p == q + v * dt and alone[k])]  # fmt: skip
+            else:
+                pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
+                same = (pos == self._prev_pos + speed * self.dt) & lanes.alone[prev_key]
+                moved = (~same).nonzero()[0].tolist()  # (np.flatnonzero: a Python layer)
             if moved:
                 get_lane = fast.get_lane_id
                 keys[moved] = lanes.keys([get_lane(ids[r]) for r in moved])
+                self._route_due = True  # (a car may be on another edge)
         else:
+            pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
             keys = lanes.keys(list(map(fast.get_lane_id, ids)))
+            self._route_due = True
         self._prev_key, self._prev_pos = keys, pos.copy()  # (lane_pos is the caller's array)
         self._place_ms = self._now_ms
         return keys, pos
@@ -163,10 +178,13 @@ class OpenReader:
 
     def following(self, speed: FloatArray, lane_key: IntArray, lane_pos: FloatArray) -> Neighbours:
         """Leader, follower, headway, tailway and neighbour speeds of the current step."""
-        leader, follower, headway, tailway = self._following.compute(
+        following = self._following
+        leader, follower, headway, tailway = following.compute(
             self.table, lane_key, lane_pos, self.route_of
         )
-        return neighbours(speed, leader, follower, headway, tailway)
+        if following.complete or following.rows is None:
+            return neighbours(speed, leader, follower, headway, tailway, following.complete)
+        return neighbours_few(speed, leader, follower, headway, tailway, following.rows)
 
     # ------------------------------------------------------------------ population
     def _follow_population(self, first: bool, removed: list[str]) -> IntArray | None:
@@ -244,6 +262,7 @@ class OpenReader:
         """ContinuousRouter on any network: a car on its route's last edge gets a new route
         starting on that edge (drawn from the edge's route choices)."""
         due = (self.table.continuous & (edge_index == self.route_end)).nonzero()[0]
+        self._route_due = bool(due.size)  # (a rerouted car's route end changed: check again)
         if not due.size:
             return
         names = self.lanes.edge_names
@@ -273,3 +292,4 @@ class OpenReader:
             return
         self.route_of[self.table.ids[row]] = tuple(route)
         self.route_end[row] = self.lanes.edge_pos.get(route[-1], -1)
+        self._route_due = True

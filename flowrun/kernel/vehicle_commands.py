@@ -12,11 +12,12 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Iterable, Sequence
-from itertools import repeat
+from itertools import compress, repeat
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from flowrun.kernel.following import SMALL
 from flowrun.kernel.vehicle_api import ERROR
 
 if TYPE_CHECKING:
@@ -285,16 +286,17 @@ class VehicleCommands:
         state = self.state
         # Flow's rule (v + a*dt), never below 0 nor above the lane's speed limit (with
         # speedMode 0 SUMO would let a commanded car exceed the limit).
-        if math.isfinite(_sum(cmd)):  # the common case: every car commanded, no indexing
+        if len(ids) <= SMALL:
+            self._send_few(cmd, slow_down)
+        elif math.isfinite(_sum(cmd)):  # the common case: every car commanded, no indexing
             target = np.minimum(np.maximum(state.speed + cmd * self.dt, 0.0), state.speed_limit)
             _consume(map(slow_down, ids, target.tolist(), repeat(SLOW_DOWN_DURATION)))
         elif np.count_nonzero(finite := np.isfinite(cmd)):  # (.any() adds a Python layer)
-            todo = finite.nonzero()[0]
-            target = np.minimum(
-                np.maximum(state.speed[todo] + cmd[todo] * self.dt, 0.0), state.speed_limit[todo]
-            )
-            for i, speed in zip(todo.tolist(), target.tolist(), strict=True):
-                slow_down(ids[i], speed, SLOW_DOWN_DURATION)
+            # the same formula on every row; only the finite commands are sent
+            target = np.minimum(np.maximum(state.speed + cmd * self.dt, 0.0), state.speed_limit)
+            sent = finite.tolist()
+            _consume(map(slow_down, compress(ids, sent), compress(target.tolist(), sent),
+                         repeat(SLOW_DOWN_DURATION)))  # fmt: skip
         for i, d in self._lane_change.items():
             if not math.isfinite(cmd[i]) and ids[i] in self._pending_removal:
                 continue
@@ -309,6 +311,22 @@ class VehicleCommands:
         self.accel_cmd = self._no_cmd.copy()
         self._lane_change = {}
         self._routes = {}
+
+    def _send_few(self, cmd: np.ndarray, slow_down: Any) -> None:
+        """The accelerations ``cmd`` (NaN: none) as ``slowDown`` to few cars: the numpy
+        formula of :meth:`send_commands` on Python floats (the same operations in the same
+        order, so the same speeds, bit for bit; numpy's cost is mostly per call)."""
+        cmd_l = cmd.tolist()
+        sent = [a - a == 0.0 for a in cmd_l]  # finite (NaN - NaN and inf - inf are NaN)
+        if True not in sent:
+            return
+        state, dt = self.state, self.dt
+        rows = zip(self.table.ids, cmd_l, state.speed.tolist(), state.speed_limit.tolist(),
+                   strict=True)  # fmt: skip
+        for vid, a, v, limit in compress(rows, sent):
+            speed = v + a * dt
+            speed = speed if speed > 0.0 else 0.0
+            slow_down(vid, speed if speed < limit else limit, SLOW_DOWN_DURATION)
 
     def _num_lanes(self, edge_id: str) -> int:
         edge = self._edge_by_id.get(edge_id)

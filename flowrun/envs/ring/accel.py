@@ -54,14 +54,39 @@ class AbsolutePositions:
     (``get_x_by_id``); each update adds the change of ``x`` since the last update and takes
     the result modulo the network length ``L``. A car that enters later starts at ``x mod L``.
     On a ring this is ``x`` itself; on the figure eight it is the distance driven, wrapped.
+
+    The updates are kept and summed up when the value is first read (the same additions in
+    the same order), so a run that never reads it pays a copy of ``x`` per step.
     """
+
+    #: at most this many positions (cars x updates) wait to be summed up (8 MB)
+    PENDING = 1_000_000
 
     def __init__(self) -> None:
         self.table: Any = None
         self.version = -1
         self.ids: list[str] = []
-        self.value = np.zeros(0)
-        self.prev = np.zeros(0)
+        self._value = np.zeros(0)
+        self._prev = np.zeros(0)
+        self._pending: list[np.ndarray] = []
+        self._length = 0.0
+
+    @property
+    def value(self) -> np.ndarray:
+        """Each row's absolute position, m."""
+        self._fold()
+        return self._value
+
+    def _fold(self) -> None:
+        """Apply the waiting updates, in order."""
+        if not self._pending:
+            return
+        value, prev, length = self._value, self._prev, self._length
+        for x in self._pending:
+            value = np.mod(value + (x - prev), length)
+            prev = x
+        self._value, self._prev = value, prev
+        self._pending = []
 
     def current(self, vk: Any) -> bool:
         """Whether the bookkeeping is of the kernel's present population."""
@@ -72,18 +97,20 @@ class AbsolutePositions:
         """Absolute positions = positions now (Flow, at reset)."""
         self.table, self.version = vk.table, vk.table.version
         self.ids = list(vk.table.ids)
-        self.prev = np.array(vk.position, dtype=np.float64)
-        self.value = self.prev.copy()
+        self._prev = np.array(vk.position, dtype=np.float64)
+        self._value = self._prev.copy()
+        self._pending = []
 
     def _follow(self, vk: Any, length: float) -> None:
         """Realign the rows after cars entered or left (newcomers start at ``x mod L``)."""
-        known = dict(zip(self.ids, zip(self.value.tolist(), self.prev.tolist(), strict=True),
+        self._fold()
+        known = dict(zip(self.ids, zip(self._value.tolist(), self._prev.tolist(), strict=True),
                          strict=True))  # fmt: skip
         x = np.asarray(vk.position, dtype=np.float64)
         ids = list(vk.table.ids)
         pairs = [known.get(v, (xi % length, xi)) for v, xi in zip(ids, x.tolist(), strict=True)]
-        self.value = np.array([p[0] for p in pairs], dtype=np.float64)
-        self.prev = np.array([p[1] for p in pairs], dtype=np.float64)
+        self._value = np.array([p[0] for p in pairs], dtype=np.float64)
+        self._prev = np.array([p[1] for p in pairs], dtype=np.float64)
         self.table, self.version, self.ids = vk.table, vk.table.version, ids
 
     def update(self, vk: Any, length: float) -> None:
@@ -93,8 +120,10 @@ class AbsolutePositions:
         elif vk.table.version != self.version:
             self._follow(vk, length)
         x = np.array(vk.position, dtype=np.float64)
-        self.value = np.mod(self.value + (x - self.prev), length)
-        self.prev = x
+        if length != self._length or (len(self._pending) + 1) * x.size > self.PENDING:
+            self._fold()
+            self._length = length
+        self._pending.append(x)
 
     def of_rows(self, vk: Any) -> np.ndarray:
         """Absolute position of each row of the kernel (``x`` where not bookkept yet)."""
@@ -134,8 +163,7 @@ class RingAccelBase(Env):
         of its own (:class:`LaneChangeAccelEnv`) keeps :meth:`Env.clip_actions`."""
         if self._spaces()[0] is not self.ring_actions.space:
             return super().clip_actions(rl_actions)
-        actions = np.reshape(rl_actions, (1, -1))
-        return self.ring_actions.accelerations(actions, self.env_params.clip_actions)[:, 0]
+        return self.ring_actions.of_one(rl_actions, self.env_params.clip_actions)
 
     @property
     def observation_space(self) -> Box:  # type: ignore[override]
@@ -181,6 +209,12 @@ class AccelEnv(RingAccelBase):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self._positions = AbsolutePositions()
         self._observed_version: tuple[Any, int] | None = None
+        #: (the population and its version, the RL cars' ids then), when not sorting
+        self._rl_cache: tuple[tuple[Any, int], list[str]] | None = None
+        #: the observed cars' count (the initial vehicles'), found at the first observation
+        self._num_observed: int | None = None
+        #: ((cars, max speed, length), the observation's divisors)
+        self._obs_scale: tuple[tuple[int, float, float], np.ndarray] | None = None
         super().__init__(*args, **kwargs)
 
     def reset(
@@ -252,24 +286,42 @@ class AccelEnv(RingAccelBase):
             self._positions.update(vk, self.k.network.length())
 
     # ------------------------------------------------------------------ Flow's hooks
-    def _apply_rl_actions(self, rl_actions: Any) -> None:
+    def _rl_ids(self) -> list[str]:
+        """The RL cars' ids in :attr:`sorted_ids` order (kept while the rows are)."""
         vk = self.k.vehicle
-        rows = np.arange(vk.table.size)[self._order()]
-        is_rl = vk.table.is_rl[rows]
-        ids = vk.table.ids
-        rl_ids = [ids[i] for i in rows[is_rl].tolist()]
+        table = vk.table
+        if self._sorting:
+            rows = np.argsort(self._positions.of_rows(vk), kind="stable")
+            return [table.ids[i] for i in rows[table.is_rl[rows]].tolist()]
+        key = (table, table.version)
+        if self._rl_cache is None or self._rl_cache[0] != key:
+            ids = table.ids
+            self._rl_cache = (key, [ids[i] for i in table.is_rl.nonzero()[0].tolist()])
+        return self._rl_cache[1]
+
+    def _apply_rl_actions(self, rl_actions: Any) -> None:
+        rl_ids = self._rl_ids()
         actions = np.asarray(rl_actions, dtype=np.float64).reshape(-1)
         n = min(len(rl_ids), actions.size)
         if n:
-            vk.apply_acceleration(rl_ids[:n], actions[:n])
+            self.k.vehicle.apply_acceleration(rl_ids if n == len(rl_ids) else rl_ids[:n],
+                                              actions[:n])  # fmt: skip
 
     def get_state(self) -> Any:
         """Speeds / max speed, then positions / length, in :attr:`sorted_ids` order, in [0, 1]."""
         vk = self.k.vehicle
-        order = self._order()
-        n = self.initial_vehicles.num_vehicles
-        speed, pos = fit(vk.speed[order], n), fit(vk.position[order], n)
-        return full_observation(speed, pos, self.k.network.max_speed(), self.k.network.length())
+        n = self._num_observed
+        if n is None:
+            n = self._num_observed = self.initial_vehicles.num_vehicles
+        speed, pos = vk.speed, vk.position
+        if self._sorting:
+            order = self._order()
+            speed, pos = speed[order], pos[order]
+        # full_observation's divisions as one: each value over its own divisor
+        scale = (n, self.k.network.max_speed(), self.k.network.length())
+        if self._obs_scale is None or self._obs_scale[0] != scale:
+            self._obs_scale = (scale, np.repeat([scale[1], scale[2]], n))
+        return clip_unit(np.concatenate((fit(speed, n), fit(pos, n))) / self._obs_scale[1])
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired-velocity reward (mean speed when ``env_params.evaluate``)."""
