@@ -14,8 +14,6 @@ from __future__ import annotations
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.yamlio import Locations
 from flowrun.errors import ConfigError
-from flowrun.training.deps import INSTALL_HINT as TRAIN_INSTALL
-from flowrun.training.rllib.deps import INSTALL_HINT as RLLIB_INSTALL
 
 #: The distribution (what pip installs) of each module the extras provide.
 PACKAGES = {
@@ -54,9 +52,14 @@ def missing_module(modules: tuple[str, ...]) -> str | None:
 def training_library_problem(cfg: ExperimentConfig, loc: Locations) -> ConfigError | None:
     """The error for a ``train:`` section whose library is not installed, else None."""
     train = cfg.train
+    if train is None:
+        return None  # nothing of flowrun.training imported (validate stays light)
     missing = missing_module(required_modules(cfg))
-    if train is None or missing is None:
+    if missing is None:
         return None
+    from flowrun.training.deps import INSTALL_HINT as TRAIN_INSTALL
+    from flowrun.training.rllib.deps import INSTALL_HINT as RLLIB_INSTALL
+
     package = PACKAGES.get(missing.split(".")[0], missing)
     if train.backend == "rllib":
         return loc.error(
