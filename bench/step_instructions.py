@@ -14,6 +14,10 @@ Modes:
     merge_raw  the merge's floor, as ``bench/open_networks.py``'s (a): flowrun builds the files
          and inserts the placed cars, then only ``simulationStep`` (two per "step") runs, and
          each entering car gets its type's speed and lane-change modes.
+    eight, eight_raw  Flow's figureeight0 benchmark (``bench/env_vs_sumo.py``): the env with
+         seeded random actions, and SUMO alone replaying every command the env sent (run
+         ``bench/step_instructions.py eight_record STEPS`` first, as ``step_instructions.sh``
+         does).
     grid, grid_raw  Flow's grid0 benchmark (3x3 lights, 300 veh/h per entering edge):
          ``TrafficLightGridBenchmarkEnv`` with seeded random switch actions, and SUMO alone
          replaying the env's signal states and car modes (``bench/grid_steps.py``; run
@@ -37,6 +41,28 @@ from ring import Ring, config, time_floor  # bench/ring.py, beside this file
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 
 
+def figure_eight(mode: str, steps: int) -> None:
+    """figureeight0's env step (``eight``), SUMO alone replaying the env's commands
+    (``eight_raw``), or the recording of those commands (``eight_record``)."""
+    import pickle
+
+    import env_vs_sumo  # bench/ is this script's folder
+
+    log_file = Path(tempfile.gettempdir()) / "flowrun-bench-figureeight0-commands.pickle"
+    if mode == "eight_record":
+        log, _ = env_vs_sumo.record("figureeight0", steps)
+        log_file.write_bytes(pickle.dumps(log))
+        return
+    env = env_vs_sumo.make("figureeight0", steps)
+    if mode == "eight_raw":
+        assert env.k.process is not None
+        env_vs_sumo.replay(env.k.process.api, pickle.loads(log_file.read_bytes())[:steps])
+    else:
+        for action in env_vs_sumo.actions(env, steps):
+            env.step(action)
+    env.close()
+
+
 def main() -> None:
     mode, steps = sys.argv[1], int(sys.argv[2])
     scale = int(sys.argv[3]) if len(sys.argv) > 3 else 1
@@ -58,6 +84,9 @@ def main() -> None:
                 api.vehicle.setSpeedMode(vid, speed_mode)
                 api.vehicle.setLaneChangeMode(vid, lane_change_mode)
         env.close()
+        return
+    if mode.startswith("eight"):
+        figure_eight(mode, steps)
         return
     if mode in ("grid", "grid_raw"):
         from grid_steps import run_grid  # bench/ is this script's folder

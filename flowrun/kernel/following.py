@@ -207,26 +207,6 @@ class Neighbours:
     follower_headway: FloatArray
 
 
-def neighbours_few(
-    speed: FloatArray,
-    leader: IntArray,
-    follower: IntArray,
-    headway: FloatArray,
-    tailway: FloatArray,
-    rows: tuple[list[int], list[int]],
-) -> Neighbours:
-    """:func:`neighbours` for few cars whose leader and follower rows are also at hand as
-    lists (``rows``): the neighbour speeds picked on lists (the same values)."""
-    n = speed.shape[0]
-    sp = speed.tolist()
-    lead_l, fol_l = rows
-    leader_speed = np.fromiter([sp[j if j >= 0 else i] for i, j in enumerate(lead_l)],
-                               np.float64, n)  # fmt: skip
-    follower_speed = np.fromiter([sp[j if j >= 0 else i] for i, j in enumerate(fol_l)],
-                                 np.float64, n)  # fmt: skip
-    return Neighbours(leader, follower, headway, tailway, leader_speed, follower_speed, tailway)
-
-
 def neighbours(
     speed: FloatArray,
     leader: IntArray,

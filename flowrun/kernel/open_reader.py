@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from flowrun.kernel.following import SMALL, Neighbours, neighbours, neighbours_few
+from flowrun.kernel.following import SMALL, Neighbours, neighbours
 from flowrun.kernel.lane_graph import LaneGraph
 from flowrun.kernel.open_road import Following
 from flowrun.kernel.state import OpenState
@@ -182,9 +182,7 @@ class OpenReader:
         leader, follower, headway, tailway = following.compute(
             self.table, lane_key, lane_pos, self.route_of
         )
-        if following.complete or following.rows is None:
-            return neighbours(speed, leader, follower, headway, tailway, following.complete)
-        return neighbours_few(speed, leader, follower, headway, tailway, following.rows)
+        return neighbours(speed, leader, follower, headway, tailway, following.complete)
 
     # ------------------------------------------------------------------ population
     def _follow_population(self, first: bool, removed: list[str]) -> IntArray | None:

@@ -50,8 +50,6 @@ class Following:
         complete: the last :meth:`compute` found a leader and a follower for every car
             (then each car is the leader of exactly one car, so the tailways are the
             followers' headways; known only for few cars, else ``False``).
-        rows: the last :meth:`compute`'s leader and follower rows as lists (few cars; else
-            ``None``).
     """
 
     def __init__(
@@ -64,7 +62,6 @@ class Following:
         self.graph = graph
         self._edge_pos = edge_pos or {}
         self.complete = False
-        self.rows: tuple[list[int], list[int]] | None = None
         #: (car, lane key) -> (the car's route then, :meth:`_route_next`'s answer)
         self._next_of: dict[tuple[str, int], tuple[tuple[str, ...] | None, int]] = {}
 
@@ -130,12 +127,10 @@ class Following:
             headway_a = np.fromiter(headway, np.float64, n)
             # everyone led and followed: each car leads exactly one, whose headway is its tailway
             self.complete = -1 not in leader and -1 not in follower_l
-            self.rows = (leader, follower_l)
             tailway_a = headway_a[follower_a] if self.complete else np.array(tailway_l, np.float64)
             return leader_a, follower_a, headway_a, tailway_a
         follower, tailway = followers_of(leader, headway)
         self.complete = False
-        self.rows = None
         return leader, follower, headway, tailway
 
     def _route_next(self, veh_id: str, key: int, routes: Mapping[str, tuple[str, ...]]) -> int:

@@ -77,10 +77,6 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self.read_xy = True
         self.api: Any = None
         self._fast: FastCalls | None = None
-        #: (start, stop, step) of a slice of rows -> their accels, decels and lengths
-        self._facts_of: dict[tuple[Any, Any, Any], tuple[FloatArray, FloatArray, FloatArray]] = {}
-        self._facts_version = -1
-        self._facts_table: Population | None = None
         VehicleCommands.__init__(self, initial.size)
         FlowVehicleGetters.__init__(self)
 
@@ -143,7 +139,6 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
                 s.speed, s.headway, s.leader_speed, s.follower_headway, s.follower_speed,
                 s.speed_limit, self.dt, time, t.accels, t.decels, t.lengths,
             )  # fmt: skip
-        facts = self._facts(idx)
         return CarFollowingInputs(
             speed=s.speed[idx],
             headway=s.headway[idx],
@@ -153,26 +148,10 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             speed_limit=s.speed_limit[idx],
             dt=self.dt,
             time=time,
-            max_accel=facts[0],
-            max_decel=facts[1],
-            length=facts[2],
+            max_accel=t.accels[idx],
+            max_decel=t.decels[idx],
+            length=t.lengths[idx],
         )
-
-    def _facts(self, idx: np.ndarray | slice) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """The population's accels, decels and lengths of the rows ``idx``; those of a slice
-        are kept while the population is unchanged (a slice of an array costs about as much
-        as a small numpy operation)."""
-        t = self.table
-        if not isinstance(idx, slice):
-            return t.accels[idx], t.decels[idx], t.lengths[idx]
-        if t.version != self._facts_version or t is not self._facts_table:
-            self._facts_of.clear()
-            self._facts_version, self._facts_table = t.version, t
-        key = (idx.start, idx.stop, idx.step)
-        facts = self._facts_of.get(key)
-        if facts is None:
-            facts = self._facts_of[key] = (t.accels[idx], t.decels[idx], t.lengths[idx])
-        return facts
 
     # ------------------------------------------------------------------ the network
     @property
