@@ -280,7 +280,10 @@ class OpenState:
     def commandable(self, acc: FloatArray, idx: Any) -> FloatArray:
         """``acc`` as commanded to the cars ``idx``: as in Flow, a car on a junction-internal
         lane is left to SUMO for that step (no command, NaN)."""
-        return np.where(self.on_internal[idx], np.nan, acc)
+        internal = self.on_internal
+        if not np.count_nonzero(internal):  # (most steps: nobody on a junction)
+            return acc
+        return np.where(internal[idx], np.nan, acc)
 
 
 VehicleState = RingState | OpenState

@@ -135,7 +135,9 @@ class RingActions:
         n = self.low.size
         if n == 0:
             return np.zeros(0)
-        a = np.asarray(actions, dtype=np.float64).reshape(-1, n)[0]
+        a = np.asarray(actions, dtype=np.float64)
+        if a.shape != self.low.shape:
+            a = a.reshape(-1, n)[0]
         return np.minimum(np.maximum(a, self.low), self.high) if clip else a
 
 
