@@ -98,8 +98,10 @@ def add(run_dir: Path, results: Path, model: str) -> Path:
                             commands, model)  # fmt: skip
     path = results / br.result_name(name, str(record["algorithm"]), int(record["train_seed"]))
     path.write_text(json.dumps(record, indent=1) + "\n")
+    verdict = ("no target" if record["target"] is None
+               else f"{record['target']}: {'met' if record['target_met'] else 'not met'}")
     print(f"{path}: policy {record['policy_mean']:.4g} vs baseline {record['baseline_mean']:.4g}"
-          f" ({record['target']}: {'met' if record['target_met'] else 'not met'})")
+          f" ({verdict})")
     return path
 
 
