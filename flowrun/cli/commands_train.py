@@ -332,6 +332,8 @@ def _evaluate_and_show(
             raise typer.Exit(code=stop.exit_code) from None
     title = f"{run_dir.name}: {result.model.name}, {episodes} episode(s)"
     console.print(compare_table(title, _rows(result.policy), _rows(result.baseline)))
+    if not result.baseline:
+        console.print("no all-human baseline: every vehicle group is RL (no human to copy)")
     return Path(result.out_dir)
 
 

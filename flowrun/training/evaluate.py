@@ -229,8 +229,10 @@ def run_evaluation(
     logs: list[Path] = []
     try:
         rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
-        human = _rollout(all_human(cfg), "baseline", episodes, seed, None, out_dir, logs,
-                         progress)  # fmt: skip
+        humans = _all_human_or_none(cfg)
+        human = [] if humans is None else _rollout(
+            humans, "baseline", episodes, seed, None, out_dir, logs, progress
+        )
     except KeyboardInterrupt as err:
         write_json(out_dir / "metrics.json", _stopped(head, logs))
         mark_done(out_dir, "interrupted", exit_code=exit_code_of(err))
@@ -248,6 +250,15 @@ def run_evaluation(
                {"status": "complete", "partial": False, **head, **result.to_dict()})
     mark_done(out_dir, "complete", exit_code=0)
     return result
+
+
+def _all_human_or_none(cfg: ExperimentConfig) -> ExperimentConfig | None:
+    """The all-human baseline of ``cfg``; ``None`` when every group is RL (e.g. Flow's
+    figureeight2: no human to copy; the benchmark's own baseline says which humans to use)."""
+    try:
+        return all_human(cfg)
+    except ConfigError:
+        return None
 
 
 def _stop_exit_code(should_stop: StopAsked) -> int:
