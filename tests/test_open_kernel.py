@@ -25,6 +25,8 @@ from flowrun.config.params import (
     VehicleParams,
 )
 from flowrun.envs.base import Env
+from flowrun.kernel.open_reader import OpenReader
+from flowrun.kernel.open_road import Following
 from flowrun.networks.base import Edge, Network, NetworkSpec, Node, StartPositions
 from flowrun.networks.registry import network_class
 from tests.sumo_truth import compare_leaders_with_sumo
@@ -308,5 +310,41 @@ def test_network_length_counts_the_junctions_and_non_internal_length_does_not() 
         )  # fmt: skip
         assert junctions > 0
         assert net.length() == pytest.approx(500.0 + junctions)
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize("name", ["figure_eight", "toy_merge"])
+def test_leaders_replayed_from_the_last_step_equal_a_fresh_search_bit_for_bit(name: str) -> None:
+    # Following reuses the last step's order while every car stays on its lane; a Following
+    # with no past must find the same leaders, followers and the same floats
+    env = make_on(name)
+    try:
+        env.reset(seed=1)
+        reader = env.k.vehicle.reader
+        assert isinstance(reader, OpenReader)
+        following = reader._following
+        graph, edge_pos = following.graph, following._edge_pos
+        compute = following.compute
+        replayed = steps = 0
+
+        def checked(pop: Any, lane_key: Any, lane_pos: Any, routes: Any = None) -> Any:
+            nonlocal replayed, steps
+            plan = following._plan
+            fresh = Following(following._get_leader, graph, edge_pos)
+            want = fresh.compute(pop, lane_key, lane_pos, routes)
+            got = compute(pop, lane_key, lane_pos, routes)
+            for a, b in zip(got, want, strict=True):
+                assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
+            assert following.complete == fresh.complete
+            replayed += plan is not None and following._plan is plan
+            steps += 1
+            return got
+
+        following.compute = checked  # type: ignore[method-assign]
+        for _ in range(600):
+            env.step(None)
+        assert steps >= 600
+        assert replayed > steps // 2  # the replay really was exercised
     finally:
         env.close()

@@ -7,7 +7,9 @@ route going there, the next car within the look-ahead), the
 :class:`~flowrun.kernel.lane_graph.LaneGraph` answers with the rearmost car of the next
 occupied lane; elsewhere SUMO's ``getLeader`` (gap minus the ego's ``minGap``, added back)
 does. Both give the same cars and gaps (``tests/test_open_kernel.py`` compares every car with
-SUMO on every network).
+SUMO on every network). For few cars, while every car stays on its lane, the last step's
+order is replayed (checked pair by pair) instead of sorted and walked again: the same
+leaders, the same float operations (``_Plan``).
 
 A car's follower is, as in Flow, the car whose leader it is (Flow's kernel sets
 ``follower`` of each car's leader); where several cars have the same leader (two lanes
@@ -19,6 +21,7 @@ merge) or look less far back.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -35,6 +38,7 @@ LOOKAHEAD = 500.0
 MAX_HOPS = 4
 #: At most this many (car, lane) answers of the route look-up are kept.
 ROUTE_CACHE = 100_000
+_INF = float("inf")
 
 Neighbour = Callable[[str, float], Any]
 Found = tuple[int, float] | None  # (row, gap) or no neighbour
@@ -64,6 +68,8 @@ class Following:
         self.complete = False
         #: (car, lane key) -> (the car's route then, :meth:`_route_next`'s answer)
         self._next_of: dict[tuple[str, int], tuple[tuple[str, ...] | None, int]] = {}
+        #: the last small compute's order (see :class:`_Plan`)
+        self._plan: _Plan | None = None
 
     @classmethod
     def of(cls, api: Any, graph: LaneGraph | None = None,
@@ -89,49 +95,115 @@ class Following:
             lane_pos: each car's front-bumper position on its lane, m.
             routes: each car's route by id (lets the lane graph answer; SUMO otherwise).
         """
-        lengths, min_gaps, ids = pop.lengths, pop.min_gaps, pop.ids
         keys = lane_key.tolist()
-        small = len(keys) <= SMALL
-        leader: Any
-        headway: Any
-        if small:  # lists: fewer numpy calls (a per-call cost) for few cars
-            pos_l, len_l = lane_pos.tolist(), lengths.tolist()
+        if len(keys) > SMALL:
+            return self._compute_many(pop, keys, lane_key, lane_pos, routes)
+        # lists: fewer numpy calls (a per-call cost) for few cars
+        pos_l, len_l = lane_pos.tolist(), pop.lengths.tolist()
+        plan, found = self._plan, None
+        if plan is not None and routes is not None and plan.holds(pop, keys, routes):
+            found = self._replay(plan, pop, pos_l, len_l)
+        if found is None:
             leader, headway, fronts, rears = leaders_small(keys, pos_l, len_l)
+            pairs = [(i, j) for i, j in enumerate(leader) if j >= 0]
+            steps = self._look_ahead(pop, keys, pos_l, len_l, fronts, rears, leader, headway,
+                                     routes)  # fmt: skip
+            plan = self._plan = None if steps is None else _Plan(pop.version, keys, pairs, steps)
         else:
-            leader, _, headway, front_a, rear_a = leaders_by_lane(lane_key, lane_pos, lengths)
-            fronts, rears = front_a.tolist(), rear_a.tolist()
-        graph = self.graph if routes is not None else None
-        walk = None
-        if graph is not None and fronts:
-            if not small:
-                pos_l, len_l = lane_pos.tolist(), lengths.tolist()
-            rear_of = dict(zip([keys[r] for r in rears], rears, strict=True))
-            walk = _Walk(graph, keys, pos_l, len_l, rear_of)
-        get_leader = self._get_leader
-        for r in fronts:
-            if walk is not None and routes is not None:
-                answer = walk.ahead(r, self._route_next(ids[r], walk.key[r], routes))
-                if answer is not _ASK:
-                    if answer is not None:
-                        leader[r], headway[r] = answer
-                    continue
-            found = get_leader(ids[r], LOOKAHEAD)
-            if found and found[0] and found[0] in pop:
-                leader[r] = pop.row(found[0])
-                headway[r] = float(found[1]) + float(min_gaps[r])
-        if small:
+            leader, headway = found
+        if plan is not None and plan.complete and leader == plan.leader:
+            follower_l = plan.follower  # the same leaders, each car leading one: same followers
+        else:
             follower_l, tailway_l = followers_small(leader, headway)
-            n = len(keys)
-            leader_a = np.fromiter(leader, np.int64, n)
-            follower_a = np.fromiter(follower_l, np.int64, n)
-            headway_a = np.fromiter(headway, np.float64, n)
-            # everyone led and followed: each car leads exactly one, whose headway is its tailway
-            self.complete = -1 not in leader and -1 not in follower_l
-            tailway_a = headway_a[follower_a] if self.complete else np.array(tailway_l, np.float64)
-            return leader_a, follower_a, headway_a, tailway_a
+            complete = -1 not in leader and -1 not in follower_l
+            if plan is not None:
+                plan.leader, plan.follower, plan.complete = leader, follower_l, complete
+            if not complete:
+                self.complete = False
+                return (np.array(leader, np.int64), np.array(follower_l, np.int64),
+                        np.array(headway, np.float64), np.array(tailway_l, np.float64))  # fmt: skip
+        # everyone led and followed: each car leads exactly one, whose headway is its tailway
+        self.complete = True
+        n = len(keys)
+        leader_a = np.fromiter(leader, np.int64, n)
+        follower_a = np.fromiter(follower_l, np.int64, n)
+        headway_a = np.fromiter(headway, np.float64, n)
+        return leader_a, follower_a, headway_a, headway_a[follower_a]
+
+    def _compute_many(self, pop: Population, keys: list[int], lane_key: IntArray,
+                      lane_pos: FloatArray, routes: Mapping[str, tuple[str, ...]] | None,
+                      ) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:  # fmt: skip
+        """:meth:`compute` on arrays, for many cars."""
+        self._plan = None
+        leader, _, headway, fronts, rears = leaders_by_lane(lane_key, lane_pos, pop.lengths)
+        self._look_ahead(pop, keys, lane_pos.tolist(), pop.lengths.tolist(), fronts.tolist(),
+                         rears.tolist(), leader, headway, routes)  # fmt: skip
         follower, tailway = followers_of(leader, headway)
         self.complete = False
         return leader, follower, headway, tailway
+
+    def _look_ahead(self, pop: Population, keys: list[int], pos_l: list[float],
+                    len_l: list[float], fronts: list[int], rears: list[int], leader: Any,
+                    headway: Any, routes: Mapping[str, tuple[str, ...]] | None,
+                    ) -> list[_Step] | None:  # fmt: skip
+        """The leaders of the front cars of the lanes, into ``leader`` and ``headway``: the
+        lane graph's where it can tell, SUMO's elsewhere. Returns what was found for each
+        front car (:class:`_Plan`), ``None`` without the lane graph."""
+        graph = self.graph
+        if graph is None or routes is None or not fronts:
+            for r in fronts:
+                self._ask(pop, r, leader, headway)
+            return None
+        ids = pop.ids
+        walk = _Walk(graph, keys, pos_l, len_l, dict(zip([keys[r] for r in rears], rears,
+                                                         strict=True)))  # fmt: skip
+        steps: list[_Step] = []
+        for r in fronts:
+            answer = walk.ahead(r, self._route_next(ids[r], keys[r], routes))
+            steps.append((r, routes.get(ids[r]), walk.found))
+            if answer is _ASK:
+                self._ask(pop, r, leader, headway)
+            elif answer is not None:
+                leader[r], headway[r] = answer
+        return steps
+
+    def _ask(self, pop: Population, r: int, leader: Any, headway: Any) -> None:
+        """SUMO's leader of car ``r`` (its gap minus the car's ``minGap``, added back)."""
+        found = self._get_leader(pop.ids[r], LOOKAHEAD)
+        if found and found[0] and found[0] in pop:
+            leader[r] = pop.row(found[0])
+            headway[r] = float(found[1]) + float(pop.min_gaps[r])
+
+    def _replay(self, plan: _Plan, pop: Population, pos_l: list[float],
+                len_l: list[float]) -> tuple[list[int], list[float]] | None:  # fmt: skip
+        """Leaders and headways from the last step's plan (every car on the same lane, the
+        same routes), the same floats as :func:`leaders_small` and :meth:`_look_ahead`;
+        ``None`` if two cars on a lane changed their order."""
+        n = len(pos_l)
+        leader, headway = [-1] * n, [_INF] * n
+        for a, b in plan.pairs:  # (a car, the car ahead on its lane) in the sort's order
+            p, q = pos_l[a], pos_l[b]
+            if not (p < q or (p == q and a < b)):
+                return None
+            leader[a] = b
+            headway[a] = q - len_l[b] - p
+        graph = self.graph
+        assert graph is not None
+        length_l, keys = graph.length_l, plan.keys
+        for r, _, found in plan.steps:
+            if found is None:
+                continue  # on its route's last edge
+            if found is not _ASK:  # the lane graph's car, through these empty internal lanes
+                j, through = found
+                dist = length_l[keys[r]] - pos_l[r]
+                for k in through:
+                    dist += length_l[k]
+                gap = dist + pos_l[j] - len_l[j]
+                if gap <= LOOKAHEAD:
+                    leader[r], headway[r] = j, gap
+                    continue
+            self._ask(pop, r, leader, headway)
+        return leader, headway
 
     def _route_next(self, veh_id: str, key: int, routes: Mapping[str, tuple[str, ...]]) -> int:
         """Edge index of the car's next route edge; -1 on an internal lane (any), -2 at the
@@ -162,6 +234,42 @@ class _Ask:
 
 _ASK: Any = _Ask()
 
+#: a front car's row, its route then, and its :attr:`_Walk.found`
+_Step = tuple[int, "tuple[str, ...] | None", Any]
+
+
+@dataclass(eq=False)
+class _Plan:
+    """The order one small :meth:`Following.compute` found, replayed at the next while it holds.
+
+    With every car on the lane it was on and the front cars on the same routes, the leaders
+    are the same unless two cars on a lane changed their order (checked pair by pair), and
+    the headways are the same float operations on the new positions: within a lane, and past
+    its end through the same empty internal lanes to the same car (or SUMO, asked again).
+
+    Attributes:
+        version: the population's version; keys: every car's lane key.
+        pairs: (car, the car ahead on its lane), every such pair.
+        steps: what the look past each lane's end found.
+        leader, follower, complete: the last leaders, followers, and whether everyone had both.
+    """
+
+    version: int
+    keys: list[int]
+    pairs: list[tuple[int, int]]
+    steps: list[_Step]
+    leader: list[int] = field(default_factory=list)
+    follower: list[int] = field(default_factory=list)
+    complete: bool = False
+
+    def holds(self, pop: Population, keys: list[int],
+              routes: Mapping[str, tuple[str, ...]]) -> bool:  # fmt: skip
+        """The same cars on the same lanes, the front cars on the same routes."""
+        if self.version != pop.version or self.keys != keys:
+            return False
+        ids = pop.ids
+        return all(routes.get(ids[r]) is route for r, route, _ in self.steps)
+
 
 class _Walk:
     """Walks the lane graph from a lane's front car to the next car ahead."""
@@ -173,17 +281,24 @@ class _Walk:
         self.pos = lane_pos
         self.lengths = lengths
         self.rear_of = rear_of
+        #: the last :meth:`ahead`'s finding: ``None`` (no leader), :data:`_ASK`, or the rearmost
+        #: car of the next occupied lane and the empty internal lanes passed on the way
+        self.found: Any = None
 
     def ahead(self, r: int, want: int) -> Found:
-        """The leader of front car ``r`` and the gap, ``None``, or :data:`_ASK`."""
+        """The leader of front car ``r`` and the gap, ``None``, or :data:`_ASK`; ``found``
+        keeps what decided it apart from the car's position (see :class:`_Plan`)."""
+        self.found = None
         if want == -2:
             return None  # on its route's last edge: SUMO sees no leader beyond
+        self.found = _ASK
         if want == -3:
             return _ASK
         g, pos = self.g, self.pos
         succ, pred, internal = g.succ_l, g.pred_l, g.internal_l
         cur = self.key[r]
         dist = g.length_l[cur] - pos[r]
+        through: list[int] = []
         for _ in range(MAX_HOPS):
             nxt = succ[cur]
             # a crossing does not matter ahead (SUMO's leader is on the car's own path), a
@@ -194,11 +309,13 @@ class _Walk:
                 return _ASK
             j = self.rear_of.get(nxt, -1)
             if j >= 0:
+                self.found = (j, through)
                 gap = dist + pos[j] - self.lengths[j]
                 return (j, gap) if gap <= LOOKAHEAD else _ASK
             if not internal[nxt]:
                 return _ASK  # the next edge's lane is empty: SUMO looks further
             dist += g.length_l[nxt]
+            through.append(nxt)
             cur = nxt
         return _ASK
 
