@@ -13,6 +13,7 @@ from flowrun.envs.bottleneck_base import (
     MAX_LANES,
     BottleneckEnv,
 )
+from flowrun.envs.lane_change_log import LogsLaneChanges
 from flowrun.envs.rewards import desired_velocity
 
 ADDITIONAL_RL_ENV_PARAMS: dict[str, Any] = {
@@ -32,7 +33,7 @@ PROGRESS_GAIN, LANE_CHANGE_GAIN = 0.1, 1.0
 FLOW_FAKE_EDGE_PAIR = np.zeros(2)
 
 
-class BottleneckAccelEnv(BottleneckEnv):
+class BottleneckAccelEnv(LogsLaneChanges, BottleneckEnv):
     """Accelerations and lane changes for a fixed set of AVs (Flow's ``BottleneckAccelEnv``).
 
     The AVs are those placed at the start (``rl_id_list``); with ``add_rl_if_exit`` an AV
@@ -90,14 +91,6 @@ class BottleneckAccelEnv(BottleneckEnv):
 
     def _edges(self) -> list[str]:
         return self.k.network.get_edge_list()
-
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Any, dict[str, Any]]:
-        """Start a new episode; lane changes are logged from here on (``get_last_lc``)."""
-        obs, info = super().reset(seed=seed, options=options)
-        self.k.vehicle.lane_change_log()
-        return obs, info
 
     def get_state(self) -> Any:
         """See the class docstring."""

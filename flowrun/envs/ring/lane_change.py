@@ -8,6 +8,7 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium.spaces import Box
 
+from flowrun.envs.lane_change_log import LogsLaneChanges
 from flowrun.envs.ring.accel import AccelEnv, clip_unit, fit
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
@@ -28,7 +29,7 @@ ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
 LANE_CHANGE_PENALTY = 0.1  # reward lost per RL lane change (Flow: 10% of the best reward)
 
 
-class LaneChangeAccelEnv(AccelEnv):
+class LaneChangeAccelEnv(LogsLaneChanges, AccelEnv):
     """Acceleration and lane-change actions for the RL cars (Flow's ``LaneChangeAccelEnv``),
     on a multi-lane ring or an open multi-lane road (the highway).
 
@@ -66,14 +67,6 @@ class LaneChangeAccelEnv(AccelEnv):
         """Normalised speeds, positions and lanes of all vehicles."""
         n = self.initial_vehicles.num_vehicles
         return Box(low=0.0, high=1.0, shape=(3 * n,), dtype=np.float32)
-
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Any, dict[str, Any]]:
-        """Start a new episode; lane changes are logged from here on (``get_last_lc``)."""
-        obs, info = super().reset(seed=seed, options=options)
-        self.k.vehicle.lane_change_log()
-        return obs, info
 
     def _info(self, crash: bool) -> dict[str, Any]:
         info = super()._info(crash)
