@@ -60,3 +60,23 @@ def test_result_files_make_the_table(tmp_path: Path) -> None:
     stopped = {**records[1], "train_status": "interrupted", "timesteps": 1_344_002,
                "recipe": {"total_timesteps": 2_100_000}}  # fmt: skip
     assert "| 0, 1 (stopped at 1.34M of 2.1M steps) |" in markdown_table([records[0], stopped])
+
+
+def test_benchmarks_without_a_target_show_flow_s_check_as_a_reference() -> None:
+    def row(name: str, speeds: list[list[float]], baseline: list[float]) -> list[str]:
+        records = []
+        for seed, values in enumerate(speeds):
+            train = {"algorithm": "ARS", "seed": seed, "status": "complete"}
+            records.append(make_record(BENCHMARKS[name], train, {}, values, baseline, ["cmd"]))
+        assert all((r["target"] is None) == (name != "merge0") for r in records)
+        (line,) = [x for x in markdown_table(records).splitlines() if x.startswith(f"| {name}")]
+        return [c.strip() for c in line.strip("|").split("|")]
+
+    # create_movies.sh passes figureeight1 at 95 % of 6.4 m/s = 6.08 m/s
+    cells = row("figureeight1", [[6.52], [4.78], [6.08]], [4.2])
+    assert cells[5] == "no target; Flow's check >= 95 % of 6.4 m/s: 2 of 3 reach it"
+    cells = row("bottleneck1", [[1483.0]], [1539.0])
+    assert cells[5] == ("no target; Flow's check >= 95 % of 1258 veh/h: 1 of 1 reach it"
+                        " (so does the baseline)")  # fmt: skip
+    assert row("grid1", [[-206.3]], [-209.9])[5] == "no target; Flow has no usable check"
+    assert "reach" not in row("merge0", [[13.5]], [8.3])[5]  # a target: met, not Flow's check
