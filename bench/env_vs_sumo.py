@@ -1,18 +1,20 @@
-"""Env step of Flow's figure eight and bottleneck benchmarks vs SUMO alone on the same traffic.
+"""Env step of Flow's benchmarks vs SUMO alone on the same traffic.
 
 Usage: ``.venv/bin/python bench/env_vs_sumo.py [--steps 600] [--repeats 7] [NAME ...]``
-(names: ``figureeight0``, ``bottleneck0``; both by default; about 2 min).
+(names: any ``configs/benchmarks/NAME.yaml``, e.g. ``merge0`` or ``grid0``; ``figureeight0``
+and ``bottleneck0`` by default, about 2 min).
 
 For each benchmark config (``configs/benchmarks/NAME.yaml``): a first env run (not timed,
 seeded random actions, one episode as long as the run, recording off) logs every command the
 env sends SUMO between two simulation steps (``slowDown``, ``setRoute``, ``setMaxSpeed``,
-``changeLane``, the modes of entering cars, cars added or removed, ...; each with its
-arguments). SUMO alone then replays that log after the same reset: the logged commands, then
-``simulationStep``, and nothing is read; the number of cars after every step must equal the
-env's (checked: "same traffic"). The env and the replay take turns ``repeats`` times, each
-from the same reset. Times are this process's CPU time (``time.process_time``: time waiting
-for a core on a busy machine is not counted), µs per env step: the median of the repeats,
-and "min", the ratio of the fastest runs (the least disturbed by other work).
+``changeLane``, the modes of entering cars, cars added or removed, signal states, ...; each
+with its arguments). SUMO alone then replays that log after the same reset: the logged
+commands, then ``simulationStep``, and nothing is read; the number of cars after every step
+must equal the env's (checked: "same traffic"). The env and the replay take turns
+``repeats`` times, each from the same reset. Times are this process's CPU time
+(``time.process_time``: time waiting for a core on a busy machine is not counted), µs per env
+step: the median of the repeats, and "min", the ratio of the fastest runs (the least
+disturbed by other work).
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import statistics
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -62,30 +64,34 @@ def actions(env: Env, steps: int) -> list[np.ndarray]:
 
 @contextmanager
 def logging_writes(api: Any, calls: list[Call]) -> Iterator[None]:
-    """Append every write call to SUMO (``api``: libsumo) to ``calls`` while inside; the
-    compiled ``slowDown`` the kernel binds at its reset is logged as ``vehicle.slowDown``."""
-    undo: list[tuple[Any, str, Any]] = []
+    """Append every write call to SUMO (``api``: libsumo) to ``calls`` while inside.
 
-    def wrap(owner: Any, attr: str, domain: str, name: str) -> None:
-        real = getattr(owner, attr)
+    The compiled functions are wrapped (``_libsumo.vehicle_slowDown`` is logged as
+    ``vehicle.slowDown``): libsumo's Python functions call them, and the kernel binds some of
+    them directly at its reset, so every write is logged once, whichever way it was made."""
+    raw = api._libsumo
+    undo: list[tuple[str, Any]] = []
+
+    def wrap(attr: str, domain: str, name: str) -> None:
+        real = getattr(raw, attr)
 
         def logged(*args: Any, **kwargs: Any) -> Any:
             calls.append((domain, name, args, kwargs))
             return real(*args, **kwargs)
 
-        undo.append((owner, attr, real))
-        setattr(owner, attr, logged)
+        undo.append((attr, real))
+        setattr(raw, attr, logged)
 
     for domain, prefixes in WRITES.items():
-        owner = getattr(api, domain)
-        for name in [n for n in dir(owner) if n.startswith(prefixes)]:
-            wrap(owner, name, domain, name)
-    wrap(api._libsumo, "vehicle_slowDown", "vehicle", "slowDown")
+        for attr in dir(raw):
+            name = attr.removeprefix(f"{domain}_")
+            if name != attr and name.startswith(prefixes):
+                wrap(attr, domain, name)
     try:
         yield
     finally:
-        for owner, attr, real in reversed(undo):
-            setattr(owner, attr, real)
+        for attr, real in reversed(undo):
+            setattr(raw, attr, real)
 
 
 def record(name: str, steps: int) -> tuple[list[list[Call]], list[int]]:
@@ -163,6 +169,55 @@ def raw_us(name: str, steps: int, log: list[list[Call]]) -> float:
     return elapsed / steps * 1e6
 
 
+@dataclass
+class Comparison:
+    """The env against SUMO alone on one benchmark's traffic (CPU µs per env step).
+
+    Attributes:
+        runs: per repetition, the env's and the replay's µs per step.
+        cars: the mean number of cars after a step.
+        writes: the mean number of writes to SUMO per step.
+        same: whether the replay held the env's number of cars after every step.
+    """
+
+    runs: list[tuple[float, float]]
+    cars: float
+    writes: float
+    same: bool
+
+    @property
+    def env(self) -> float:
+        """The env's median µs per step."""
+        return statistics.median(r[0] for r in self.runs)
+
+    @property
+    def sumo(self) -> float:
+        """SUMO alone's median µs per step."""
+        return statistics.median(r[1] for r in self.runs)
+
+    @property
+    def ratio(self) -> float:
+        """Env over SUMO alone, of the medians."""
+        return self.env / self.sumo
+
+    @property
+    def fastest(self) -> float:
+        """Env over SUMO alone, of the fastest runs (the least disturbed by other work)."""
+        return min(r[0] for r in self.runs) / min(r[1] for r in self.runs)
+
+
+def compare(name: str, steps: int, repeats: int) -> Comparison:
+    """Log the env's writes, check the replay's traffic, then time both ``repeats`` times."""
+    log, counts = record(name, steps)
+    env = make(name, steps)
+    assert env.k.process is not None
+    same = replay(env.k.process.api, log, count=True) == counts
+    env.close()
+    runs = [(env_us(name, steps), raw_us(name, steps, log)) for _ in range(repeats)]
+    writes = sum(len(c) for c in log) / steps
+    return Comparison(runs, sum(counts) / len(counts), writes, same)
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("names", nargs="*", default=["figureeight0", "bottleneck0"])
@@ -171,21 +226,11 @@ def main() -> None:
     args = p.parse_args()
     print(f"load before: {os.getloadavg()[0]:.2f}")
     for name in args.names:
-        log, counts = record(name, args.steps)
-        env = make(name, args.steps)
-        assert env.k.process is not None
-        same = replay(env.k.process.api, log, count=True) == counts
-        env.close()
-        runs = [(env_us(name, args.steps), raw_us(name, args.steps, log))
-                for _ in range(args.repeats)]  # fmt: skip
-        e = statistics.median(r[0] for r in runs)
-        r = statistics.median(r[1] for r in runs)
-        fastest = min(r[0] for r in runs) / min(r[1] for r in runs)
-        writes = sum(len(c) for c in log) / args.steps
-        print(f"{name}: env {e:6.0f} us/step  SUMO alone {r:6.0f} us/step  ratio {e / r:5.2f}  "
-              f"(min {fastest:.2f}; runs {', '.join(f'{a / b:.2f}' for a, b in runs)})  "
-              f"mean cars {sum(counts) / len(counts):.0f}  writes/step {writes:.1f}  "
-              f"same traffic: {'yes' if same else 'NO'}")  # fmt: skip
+        c = compare(name, args.steps, args.repeats)
+        print(f"{name}: env {c.env:6.0f} us/step  SUMO alone {c.sumo:6.0f} us/step  "
+              f"ratio {c.ratio:5.2f}  (min {c.fastest:.2f}; runs "
+              f"{', '.join(f'{a / b:.2f}' for a, b in c.runs)})  mean cars {c.cars:.0f}  "
+              f"writes/step {c.writes:.1f}  same traffic: {'yes' if c.same else 'NO'}")  # fmt: skip
     print(f"load after: {os.getloadavg()[0]:.2f}")
 
 

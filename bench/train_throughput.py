@@ -20,6 +20,7 @@ import argparse
 import os
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -75,6 +76,42 @@ def train_rate(config: str, sets: list[str], steps: int, evaluate: bool) -> tupl
     return result.steps_per_second, detail
 
 
+@dataclass
+class Throughput:
+    """One config's env alone against its training loop.
+
+    Attributes:
+        name: the config's name.
+        alone: env steps/s of one env alone.
+        training: env steps/s of the training loop.
+        detail: the training's envs and where its time went.
+    """
+
+    name: str
+    alone: float
+    training: float
+    detail: str
+
+    @property
+    def ratio(self) -> float:
+        """Training over one env alone."""
+        return self.training / self.alone
+
+
+def target(cores: int) -> float:
+    """The lowest ratio that meets the target on ``cores`` cores: 60 % of them."""
+    return 0.6 * cores
+
+
+def measure(config: str, sets: list[str], steps: int, env_steps: int,
+            evaluate: bool = False) -> Throughput:  # fmt: skip
+    """One env alone for ``env_steps`` steps, then ``train`` for ``steps`` steps."""
+    cfg = load_config(config, sets)
+    alone = env_rate(cfg, env_steps)
+    rate, detail = train_rate(config, sets, steps, evaluate)
+    return Throughput(cfg.name, alone, rate, detail)
+
+
 def main() -> None:
     """Print the table: env rate, training rate, ratio, target."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -86,21 +123,18 @@ def main() -> None:
     args = parser.parse_args()
     cores = os.cpu_count() or 1
     print(f"{cores} cores; load {os.getloadavg()[0]:.2f} (1-min average); target ratio "
-          f">= {0.6 * cores:.1f}", flush=True)
+          f">= {target(cores):.1f}", flush=True)
     rows = []
     for config in args.configs:
-        cfg = load_config(config, args.sets)
-        alone = env_rate(cfg, args.env_steps)
-        rate, detail = train_rate(config, args.sets, args.steps, args.eval)
-        ratio = rate / alone
-        rows.append((cfg.name, alone, rate, ratio))
-        print(f"{cfg.name}: env alone {alone:.0f} steps/s, training {rate:.0f} steps/s, "
-              f"ratio {ratio:.2f} ({detail}); load {os.getloadavg()[0]:.2f}", flush=True)
+        t = measure(config, args.sets, args.steps, args.env_steps, args.eval)
+        rows.append(t)
+        print(f"{t.name}: env alone {t.alone:.0f} steps/s, training {t.training:.0f} steps/s, "
+              f"ratio {t.ratio:.2f} ({t.detail}); load {os.getloadavg()[0]:.2f}", flush=True)
     print("\n| config | env alone, steps/s | training, steps/s | ratio | target |")
     print("|---|---:|---:|---:|---:|")
-    for name, alone, rate, ratio in rows:
-        mark = "yes" if ratio >= 0.6 * cores else "no"
-        print(f"| {name} | {alone:.0f} | {rate:.0f} | {ratio:.2f} | {mark} |")
+    for t in rows:
+        mark = "yes" if t.ratio >= target(cores) else "no"
+        print(f"| {t.name} | {t.alone:.0f} | {t.training:.0f} | {t.ratio:.2f} | {mark} |")
 
 
 if __name__ == "__main__":
