@@ -96,3 +96,49 @@ def test_unknown_command_is_refused_with_a_suggestion() -> None:
     result = CliRunner().invoke(app, ["baselin"])
     assert result.exit_code == 2
     assert "baseline" in result.output
+
+
+def modules_after_import(module: str) -> set[str]:
+    """The modules imported by ``import MODULE`` in a fresh interpreter."""
+    code = f"import sys, json, {module}\nprint(json.dumps(sorted(sys.modules)))\n"
+    done = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True
+    )
+    return set(json.loads(done.stdout))
+
+
+TRAINING_HEAVY = (
+    "flowrun.training.trainer",
+    "flowrun.training.evaluate",
+    "flowrun.kernel",
+    "flowrun.envs",
+    "flowrun.recording",
+    "torch",
+    "stable_baselines3",
+    "libsumo",
+)
+LIGHT_TRAINING = (
+    "flowrun.training.deps",
+    "flowrun.training.algorithms",
+    "flowrun.training.rllib.deps",
+)
+
+
+@pytest.mark.parametrize("module", LIGHT_TRAINING)
+def test_light_training_modules_import_no_trainer_nor_kernel(module: str) -> None:
+    loaded = modules_after_import(module)
+    assert module in loaded
+    assert not [m for m in loaded if any(m == h or m.startswith(h + ".") for h in TRAINING_HEAVY)]
+
+
+def test_training_package_names_load_on_first_use() -> None:
+    import flowrun.training as training
+    from flowrun.training.evaluate import eval_config  # binds the submodule on the package ...
+
+    assert callable(eval_config)
+    assert training.evaluate.__name__ == "evaluate"  # ... yet the name stays the function
+    assert training.train.__module__ == "flowrun.training.trainer"
+    assert training.all_human is sys.modules["flowrun.training.evaluate"].all_human
+    assert sorted(training.__all__) == sorted(set(training.__all__) & set(dir(training)))
+    with pytest.raises(AttributeError, match="no attribute 'trainer_of_nothing'"):
+        training.trainer_of_nothing  # noqa: B018
