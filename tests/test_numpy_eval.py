@@ -11,6 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 from flowrun.cli.main import app
+from flowrun.config.params import VehicleParams, is_rl
 from flowrun.errors import ConfigError
 from flowrun.loading.loader import load_config
 from flowrun.training.numpy_eval import NumpyEpisodeRunner, numpy_eval_plan
@@ -81,6 +82,20 @@ def test_stop_request_gives_up_the_evaluation() -> None:
     # asked to stop during the all-human baseline: one unknown baseline per seed
     stopped = NumpyEpisodeRunner(load_config(RING, SHORT), [1, 2], lambda: True)
     assert len(stopped.baseline) == 2 and all(np.isnan(stopped.baseline))
+
+
+def test_without_a_human_group_both_runners_leave_the_baseline_unknown() -> None:
+    cfg = load_config(RING, SHORT)
+    only_rl = replace(cfg, vehicles=VehicleParams([g for g in cfg.vehicles.groups if is_rl(g)]))
+    fast = NumpyEpisodeRunner(cfg, [1, 2], best_by="return")
+    sumo = EpisodeRunner(replace(cfg, env=replace(cfg.env, evaluate=True)), [1, 2], None, "return")
+    try:
+        for runner in (fast, sumo):
+            baseline = runner._baseline(only_rl)  # no human to copy: no episode is played
+            assert len(baseline) == 2 and all(np.isnan(baseline))
+    finally:
+        sumo.close()
+        fast.close()
 
 
 def test_a_config_the_numpy_rings_cannot_run_is_refused_at_eval_backend() -> None:

@@ -190,11 +190,11 @@ def test_all_human_baseline_drives_the_av_like_the_humans() -> None:
 
 
 def test_a_config_of_only_rl_cars_is_evaluated_without_an_all_human_baseline() -> None:
-    from flowrun.training.evaluate import _all_human_or_none
+    from flowrun.training.periodic_eval import all_human_or_none
 
     benchmarks = Path(__file__).resolve().parents[1] / "configs" / "benchmarks"
     only_rl = load_config(benchmarks / "figureeight2.yaml")  # 14 AVs, no human group
-    assert _all_human_or_none(only_rl) is None
-    mixed = _all_human_or_none(load_config(benchmarks / "figureeight0.yaml"))
+    assert all_human_or_none(only_rl) is None
+    mixed = all_human_or_none(load_config(benchmarks / "figureeight0.yaml"))
     assert mixed is not None
     assert {g.acceleration_controller.type for g in mixed.vehicles.groups} == {"IDM"}

@@ -37,7 +37,8 @@ from flowrun.rundir.folders import (
     write_json,
 )
 from flowrun.training.algorithms import algorithm_class
-from flowrun.training.periodic_eval import all_human
+from flowrun.training.periodic_eval import all_human as all_human
+from flowrun.training.periodic_eval import all_human_or_none
 from flowrun.training.trainer import (
     BEST_MODEL,
     BEST_VECNORMALIZE,
@@ -229,7 +230,7 @@ def run_evaluation(
     logs: list[Path] = []
     try:
         rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
-        humans = _all_human_or_none(cfg)
+        humans = all_human_or_none(cfg)
         human = [] if humans is None else _rollout(
             humans, "baseline", episodes, seed, None, out_dir, logs, progress
         )
@@ -250,15 +251,6 @@ def run_evaluation(
                {"status": "complete", "partial": False, **head, **result.to_dict()})
     mark_done(out_dir, "complete", exit_code=0)
     return result
-
-
-def _all_human_or_none(cfg: ExperimentConfig) -> ExperimentConfig | None:
-    """The all-human baseline of ``cfg``; ``None`` when every group is RL (e.g. Flow's
-    figureeight2: no human to copy; the benchmark's own baseline says which humans to use)."""
-    try:
-        return all_human(cfg)
-    except ConfigError:
-        return None
 
 
 def _stop_exit_code(should_stop: StopAsked) -> int:

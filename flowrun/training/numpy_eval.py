@@ -23,7 +23,7 @@ from flowrun.errors import ConfigError
 from flowrun.fastring.plan import NumpyBackendRefusal, RingPlan, ring_plan
 from flowrun.fastring.rings import FastRings
 from flowrun.fastring.tasks import RingTask
-from flowrun.training.periodic_eval import Act, Episodes, EpisodeScore, all_human
+from flowrun.training.periodic_eval import Act, Episodes, EpisodeScore, all_human_or_none
 
 EVAL_BACKEND_PATH = "train.eval_backend"
 
@@ -75,11 +75,12 @@ class NumpyEpisodeRunner(Episodes):
     def _baseline(self, cfg: ExperimentConfig) -> list[float]:
         """Last-half mean speed of each seed's all-human episode (``nan`` when unknown)."""
         nan = [math.nan] * len(self.seeds)
-        try:
-            human = numpy_eval_plan(all_human(cfg))
-        except ConfigError:  # no human group to copy: scores fall back to returns
+        humans = all_human_or_none(cfg)
+        if humans is None:  # no human group to copy: scores fall back to returns
             return nan
-        runs = self._play(human, None, None)  # None: asked to stop (run() gives up too)
+        # not refused, as the policy's plan was not: only the RL groups change, to the human
+        # controller that plan already runs. runs None: asked to stop (run() gives up too)
+        runs = self._play(numpy_eval_plan(humans), None, None)
         return nan if runs is None else [r.last_half_speed for r in runs]
 
     def run(

@@ -60,6 +60,16 @@ def all_human(cfg: ExperimentConfig) -> ExperimentConfig:
     return replace(cfg, vehicles=VehicleParams(groups))
 
 
+def all_human_or_none(cfg: ExperimentConfig) -> ExperimentConfig | None:
+    """:func:`all_human` of ``cfg``; ``None`` when every group is RL (e.g. Flow's
+    figureeight2: no human to copy; the benchmark's own baseline says which humans to use),
+    where the evaluations score by returns and leave the baseline out."""
+    try:
+        return all_human(cfg)
+    except ConfigError:
+        return None
+
+
 @dataclass(frozen=True)
 class EpisodeScore:
     """One evaluation episode.
@@ -156,9 +166,8 @@ class EpisodeRunner(Episodes):
         """Last-half mean speed of each seed's episode with the AVs driven like the humans."""
         from flowrun.envs.factory import make_env
 
-        try:
-            human = all_human(cfg)
-        except ConfigError:  # no human group to copy: scores fall back to returns
+        human = all_human_or_none(cfg)
+        if human is None:  # no human group to copy: scores fall back to returns
             return [math.nan] * len(self.seeds)
         env = make_env(human)
         try:
