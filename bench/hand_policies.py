@@ -1,6 +1,8 @@
-"""Hand-written policies on bottleneck0 and grid0: are the targets reachable by the envs' controls?
+"""Hand-written policies on bottleneck0, grid0 and figureeight0: are the targets reachable by
+the envs' controls?
 
-Run: ``.venv/bin/python bench/hand_policies.py bottleneck0|grid0 [--seeds 5] [--wide]``
+Run: ``.venv/bin/python bench/hand_policies.py bottleneck0|grid0|figureeight0 [--seeds 5]
+[--wide]``
 (a few minutes per benchmark; ``--wide`` tries more parameters).
 
 Each policy is a function of the env's state fed through the env's own action space (the env is
@@ -23,6 +25,9 @@ being the episode's return. The benchmark's own baseline runs on the same seeds.
   later, a green wave); ``queue D g`` switches a light once its green has lasted ``g`` s
   (after its yellow) and more cars are within ``D`` m of it on its red approaches than on its
   green ones. Every policy but ``program`` switches all lights at the first step to take them over.
+* figureeight0 (``AccelEnv``): the AV's acceleration from what the env observes; the rules,
+  their scoring (the whole episode's mean speed, its second half and first 30 s) and the
+  column ceiling are in ``bench/hand_figure_eight.py``.
 """
 
 from __future__ import annotations
@@ -43,6 +48,9 @@ from flowrun.experiment.benchmark import BENCHMARKS
 from flowrun.experiment.benchmark_results import TARGETS, eval_seeds
 from flowrun.experiment.runner import Experiment
 from flowrun.loading.loader import load_config
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import hand_figure_eight
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs" / "benchmarks"
 #: a policy: built for an env, then called with each observation
@@ -295,7 +303,7 @@ def _table(name: str, rows: list[Row], baseline: float, target: float) -> None:
 
 def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("benchmark", choices=("bottleneck0", "grid0"))
+    parser.add_argument("benchmark", choices=("bottleneck0", "grid0", "figureeight0"))
     parser.add_argument("--seeds", type=int, default=5, help="evaluation episodes (default 5)")
     parser.add_argument("--wide", action="store_true", help="more parameters per policy")
     parser.add_argument(
@@ -307,6 +315,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     name, seeds = args.benchmark, eval_seeds()[: args.seeds]
     print(f"{name}, evaluate mode, seeds {seeds[0]}-{seeds[-1]}, load {os.getloadavg()[0]:.1f}, "
           f"`{' '.join([Path(sys.argv[0]).name, *(argv or sys.argv[1:])])}`\n")  # fmt: skip
+    if name == "figureeight0":
+        hand_figure_eight.main(seeds, args.wide, CONFIGS)
+        return
     label = "SUMO's actuated lights" if name == "grid0" else "all human (baseline)"
     base = _scores(name, BENCHMARKS[name].baseline, None, seeds, label)
     target = TARGETS[name].threshold(base.mean)

@@ -55,3 +55,54 @@ def test_meter_engages_above_its_threshold_and_releases_at_or_below_the_lower_on
     assert hp.meter_engaged(True, 10.0, 12.0, 8.0)  # engaged: holds until 8
     assert not hp.meter_engaged(True, 8.0, 12.0, 8.0)
     assert not hp.meter_engaged(True, 12.0, 12.0, 12.0)  # no hysteresis: on above 12 only
+
+
+f8 = hp.hand_figure_eight
+LOOP = f8.Loop(length=420.0, crossings=(30.0, 240.0), max_speed=30.0, av=2)
+
+
+def _obs(speeds: list[float], xs: list[float]) -> np.ndarray:
+    return np.array([*(np.array(speeds) / 30.0), *(np.array(xs) / 420.0)])
+
+
+def test_leader_gap_wraps_around_the_loop() -> None:
+    gap, j = f8.leader_gap(np.array([400.0, 10.0, 200.0]), 0, 420.0)
+    assert (round(gap, 6), j) == (25.0, 1)  # 30 m ahead across x = 0, minus a 5 m car
+
+
+def test_crossing_gap_follows_the_last_car_due_first_on_the_other_link() -> None:
+    # the AV at x 200 is 40 m from its link (starts at 240); cars 0 and 1 head for the other
+    # link (30): car 0 is 10 m from it, car 1 is on it 5 m past its start; car 3 is due later
+    x = np.array([20.0, 35.0, 200.0, 400.0])
+    gap, j = f8.crossing_gap(x, 2, LOOP, 14.4)
+    assert j == 0 and abs(gap - (40.0 - 10.0 - 14.4)) < 1e-9
+    # a car on its own link (5 m past the start of 240) is committed: no crossing leader
+    assert f8.crossing_gap(np.array([20.0, 35.0, 245.0]), 2, LOOP, 14.4)[0] == float("inf")
+
+
+def test_gap_speed_rule_stands_close_behind_and_drives_the_speed_its_gap_allows() -> None:
+    assert f8.gap_speed_accel(30.0, 0.0, 90.0, 15.0) == -3.0  # near leader: stands (brakes)
+    assert abs(f8.gap_speed_accel(120.0, 0.0, 90.0, 15.0) - 2.0) < 1e-9  # leader away: sets off
+    assert abs(f8.gap_speed_accel(240.0, 8.0, 90.0, 15.0) - 2.0) < 1e-9  # wants 10 m/s
+    assert f8.gap_speed_accel(1000.0, 0.0, 90.0, 15.0) == 3.0  # clipped to the action space
+
+
+def test_gap_speed_rule_on_an_observation_and_its_linear_form_across_x_zero() -> None:
+    rule = f8.Rule("gap-speed", s0=90.0, t_gap=15.0)
+    linear = f8.Rule("gap-speed", s0=90.0, t_gap=15.0, linear=True)
+    # the AV (last) at x 300 m, 8 m/s; its leader (car 0) 245 m ahead, past x = 0 at 125 m
+    obs = _obs([8.0, 8.0, 8.0], [125.0, 200.0, 300.0])
+    assert abs(rule.accel(obs, LOOP) - ((245.0 - 5.0 - 90.0) / 15.0 - 8.0)) < 1e-9
+    assert linear.accel(obs, LOOP) == -3.0  # x_leader - x_AV = -175 m: it brakes instead
+    ahead = _obs([8.0, 8.0, 8.0], [345.0, 200.0, 100.0])  # the same gap without the wrap
+    assert abs(linear.accel(ahead, LOOP) - rule.accel(ahead, LOOP)) < 1e-9
+
+
+def test_idm_equilibrium_speed_is_where_the_humans_idm_does_not_accelerate() -> None:
+    from flowrun.controllers.car_following_formulas import idm_accel
+
+    v = f8.idm_equilibrium_speed(10.12)
+    assert 8.0 < v < 8.2
+    a = idm_accel(np.array(v), np.array(10.12), np.array(v), v0=30.0, T=1.0, a=1.0, b=1.5,
+                  delta=4.0, s0=2.0)  # fmt: skip
+    assert abs(float(a)) < 1e-6
