@@ -5,8 +5,8 @@ Usage::
     .venv/bin/python bench/learning_speed.py [NAME ...] [--quick]
 
 Names: ``configs/benchmarks/NAME.yaml``; figureeight0, merge0, grid0 and bottleneck0 by
-default (about 6 min on a quiet 2-core machine; ``--quick`` about 2 min). Per benchmark, in
-one run:
+default (1.5 to 3 min on a 2-core machine, depending on what else runs; ``--quick`` 1 to 2.5
+min). Per benchmark, in one run:
 
 - **env step against SUMO alone** (``bench/env_vs_sumo.py``): a first env run logs every write
   the env sends SUMO, SUMO alone replays it on the same traffic (the car count checked equal
