@@ -33,6 +33,7 @@ import math
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -43,6 +44,7 @@ CAR = 5.0  #: vehicle length, m
 #: a car has left the junction once its front is this far past its crossing link's start (the
 #: 9.4 m link plus its length), m
 CLEAR = 14.4
+MID = 4.7  #: the crossing links' conflict point (where they cross): their middle, m past the start
 
 
 @dataclass(frozen=True)
@@ -205,7 +207,7 @@ class Episodes:
     benchmark``'s metric), over its second half and over its first 30 s (the evaluate-mode
     reward); collisions and teleports; and over the second halves the humans' mean gap and the
     column's longest span (the AV's front back to its leader's front: ``L`` minus the AV's gap
-    minus a car)."""
+    minus a car); over whole episodes :func:`stream_switch_gap`."""
 
     label: str
     whole: list[float]
@@ -215,6 +217,7 @@ class Episodes:
     human_gap: float
     span: float
     length: float  #: the loop, m
+    switch: float  #: the shortest time between passages of the two streams at the junction, s
 
 
 def run_rule(name: str, sets: list[str], rule: Rule | None, seeds: list[int], label: str,
@@ -227,7 +230,7 @@ def run_rule(name: str, sets: list[str], rule: Rule | None, seeds: list[int], la
     cfg = load_config(configs / f"{name}.yaml", [*sets, "env.evaluate=true"])
     env, whole, half, first, crashes = make_env(cfg), [], [], [], 0
     length = math.nan
-    horizon, gaps, spans = int(cfg.env.horizon), [], []
+    horizon, gaps, spans, switch = int(cfg.env.horizon), [], [], math.inf
     try:
         experiment = Experiment(env)
         for seed in seeds:
@@ -247,11 +250,62 @@ def run_rule(name: str, sets: list[str], rule: Rule | None, seeds: list[int], la
             crashes += m.collisions + m.teleports
             g, s = _column(env, seen[horizon // 2 :], rule is not None)
             length = float(env.k.network.length())
+            switch = min(switch, _switch(env, seen, float(cfg.sim.sim_step)))
             gaps.append(g)
             spans.append(s)
     finally:
         env.close()
-    return Episodes(label, whole, half, first, crashes, float(np.mean(gaps)), max(spans), length)
+    mean_gap = float(np.mean(gaps))
+    return Episodes(label, whole, half, first, crashes, mean_gap, max(spans), length, switch)
+
+
+def stream_switch_gap(
+    xs: np.ndarray, points: tuple[float, float], length: float, dt: float
+) -> float:
+    """The shortest time (s) from a car passing one crossing link's conflict point to the next
+    car passing the other's; ``xs``: positions ``x`` (m), one row per step ``dt`` s apart."""
+    events: list[tuple[float, int]] = []
+    for stream, point in enumerate(points):
+        before, after = (point - xs[:-1]) % length, (point - xs[1:]) % length
+        steps, _ = np.nonzero(after - before > length / 2)  # the distance to it wrapped: passed
+        events += [((int(t) + 1) * dt, stream) for t in steps]
+    events.sort()
+    gaps = [b[0] - a[0] for a, b in pairwise(events) if a[1] != b[1]]
+    return min(gaps) if gaps else math.inf
+
+
+def _switch(env: Any, observed: list[np.ndarray], dt: float) -> float:
+    length = float(env.k.network.length())
+    starts = env.k.network.total_edgestarts_dict
+    xs = np.array([obs[obs.size // 2 :] * length for obs in observed])
+    points = (starts[":center_1"] + MID, starts[":center_0"] + MID)
+    return stream_switch_gap(xs, points, length, dt)
+
+
+def steady_layout_fits(headway: float, speed: float, length: float, switch: float) -> bool:
+    """Whether the AV at 0 and 13 humans ``headway`` m apart behind it, all at ``speed``, pass
+    the junction with cars of the two streams at least ``switch`` s apart. Positions modulo
+    half the loop put both streams on one circle: neighbours on it that are not neighbours on
+    the road reach the junction from the two links."""
+    half = length / 2
+    pos = np.array([(-k * headway) % length for k in range(14)])
+    pos = pos[np.argsort(pos % half)]
+    for a, b in zip(pos, np.roll(pos, -1), strict=True):
+        apart = ((b % half) - (a % half)) % half
+        if abs((b - a) % length - apart) > 1e-6 and apart < switch * speed:
+            return False
+    return True
+
+
+def best_steady_layout(length: float, switch: float) -> tuple[float, float]:
+    """The fastest layout of :func:`steady_layout_fits` with the humans at IDM's steady gap:
+    (speed m/s, human headway m); the AV's own headway is what is left of the loop."""
+    best = (0.0, 0.0)
+    for headway in np.arange(7.5, length / 14, 0.01):
+        speed = idm_equilibrium_speed(float(headway) - CAR)
+        if speed > best[0] and steady_layout_fits(float(headway), speed, length, switch):
+            best = (speed, float(headway))
+    return best
 
 
 def _column(env: Any, observed: list[np.ndarray], with_av: bool) -> tuple[float, float]:
@@ -272,39 +326,43 @@ def _column(env: Any, observed: list[np.ndarray], with_av: bool) -> tuple[float,
 
 def print_table(rows: list[Episodes], baseline: float, target: float) -> None:
     print("| policy | per seed | mean | vs baseline | target | 2nd half | first 30 s "
-          "| human gap, 2nd half | longest column | crashes |")  # fmt: skip
-    print("|---|---|---:|---:|---|---:|---:|---:|---:|---:|")
+          "| human gap, 2nd half | longest column | stream switch | crashes |")  # fmt: skip
+    print("|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|")
     for r in rows:
         mean = float(np.mean(r.whole))
         print(f"| {r.label} | {', '.join(f'{v:.2f}' for v in r.whole)} | {mean:.3f} "
               f"| {(mean - baseline) / baseline * 100:+.1f} % | {'met' if mean >= target else '-'} "
               f"| {np.mean(r.second_half):.2f} | {np.mean(r.first_30s):.2f} "
-              f"| {r.human_gap:.1f} m | {_metres(r.span)} | {r.crashes} |")  # fmt: skip
+              f"| {r.human_gap:.1f} m | {_metres(r.span)} | {r.switch:.1f} s "
+              f"| {r.crashes} |")  # fmt: skip
 
 
 def _metres(value: float) -> str:
     return "–" if math.isnan(value) else f"{value:.0f} m"
 
 
-def print_ceiling(length: float, best: Episodes) -> None:
-    """The column bound: 13 human headways and a clearance ``c`` within half the loop."""
+def print_ceiling(rows: list[Episodes], best: Episodes) -> None:
+    """The column bound (13 human headways and a clearance ``c`` within half the loop), the
+    fastest steady layout at the measured stream-switch gap, and the measurement."""
+    length = best.length
     half = length / 2
-    print(
-        f"\nceiling: half the loop is {half:.1f} m; a column of the AV and 13 humans at one "
-        "speed never meets its own tail at the junction if 13 (5 m + gap) + c <= that:"
-    )
+    print(f"\nceiling: half the loop is {half:.1f} m; a column of the AV and 13 humans at one "
+          "speed never meets its own tail at the junction if 13 (5 m + gap) + c <= that:")
     for c in (7.0, 14.4):
         gap = (half - c) / 13 - CAR
-        print(
-            f"  c = {c:g} m: human gap <= {gap:.2f} m, IDM's steady speed there "
-            f"{idm_equilibrium_speed(gap):.2f} m/s"
-        )
-    print(
-        f"measured ({best.label}, second halves): human gap {best.human_gap:.2f} m (IDM's "
-        f"steady speed {idm_equilibrium_speed(best.human_gap):.2f} m/s), mean speed "
-        f"{np.mean(best.second_half):.2f} m/s, longest column {best.span:.1f} m "
-        f"(half the loop minus {half - best.span:.1f} m)"
-    )
+        print(f"  c = {c:g} m: human gap <= {gap:.2f} m, IDM's steady speed there "
+              f"{idm_equilibrium_speed(gap):.2f} m/s")
+    switch = min(r.switch for r in rows)
+    print(f"the two streams passed the junction at least {switch:.1f} s apart (all rows); the "
+          "fastest steady layout (13 humans at IDM's gap, the AV anywhere) whose streams pass")
+    for gap_s in sorted({round(switch, 1), 1.0, 0.75}, reverse=True):
+        speed, headway = best_steady_layout(length, gap_s)
+        shape = "one column" if 13 * headway < half else "streams interleaved"
+        print(f"  >= {gap_s:g} s apart: {speed:.2f} m/s, human headway {headway:.2f} m ({shape})")
+    print(f"measured ({best.label}, second halves): human gap {best.human_gap:.2f} m (IDM's "
+          f"steady speed {idm_equilibrium_speed(best.human_gap):.2f} m/s), mean speed "
+          f"{np.mean(best.second_half):.2f} m/s, longest column {best.span:.1f} m "
+          f"(half the loop minus {half - best.span:.1f} m)")  # fmt: skip
 
 
 def main(seeds: list[int], wide: bool, configs: Any) -> None:
@@ -325,4 +383,4 @@ def main(seeds: list[int], wide: bool, configs: Any) -> None:
     print_table(rows, baseline, target)
     best = max(rows[1:], key=lambda r: float(np.mean(r.whole)))
     print(f"\nbest hand policy: {best.label}, {np.mean(best.whole):.3f}")
-    print_ceiling(base.length, best)
+    print_ceiling(rows, best)

@@ -106,3 +106,22 @@ def test_idm_equilibrium_speed_is_where_the_humans_idm_does_not_accelerate() -> 
     a = idm_accel(np.array(v), np.array(10.12), np.array(v), v0=30.0, T=1.0, a=1.0, b=1.5,
                   delta=4.0, s0=2.0)  # fmt: skip
     assert abs(float(a)) < 1e-6
+
+
+def test_stream_switch_gap_is_the_shortest_time_between_the_two_links_passages() -> None:
+    # car 0 passes link 0's point (10 m) at 1.0 s, car 1 link 1's (100 m) at 2.0 s and car 2
+    # link 1's at 2.5 s: one switch of streams, 1.0 s after the other
+    xs = np.array([[8.0, 96.0, 50.0], [9.5, 97.0, 60.0], [10.5, 98.5, 70.0], [11.0, 99.5, 80.0],
+                   [11.5, 100.5, 90.0], [12.0, 101.0, 100.5]])  # fmt: skip
+    assert f8.stream_switch_gap(xs, (10.0, 100.0), 200.0, 0.5) == 1.0  # 2 steps of 0.5 s
+    # a position that steps back a little (x at a link's end) is not a passage
+    back = np.array([[12.0, 50.0], [9.0, 50.0], [11.0, 50.0]])
+    assert f8.stream_switch_gap(back, (10.0, 100.0), 200.0, 0.1) == float("inf")
+
+
+def test_a_column_within_half_the_loop_fits_and_evenly_spread_cars_never_do() -> None:
+    length = 421.94
+    assert f8.steady_layout_fits(15.0, 8.0, length, 1.6)  # column of 13 x 15 m < 211 m
+    assert not f8.steady_layout_fits(length / 14, 10.0, length, 0.1)  # k and k + 7 meet
+    speed, headway = f8.best_steady_layout(length, 1.6)
+    assert 13 * headway < length / 2 and 8.0 < speed < 8.4  # the best layout is one column
