@@ -47,6 +47,18 @@ def fit(values: np.ndarray, size: int) -> np.ndarray:
     return out
 
 
+def from_first_rl(pos: np.ndarray, is_rl: np.ndarray, length: float) -> np.ndarray:
+    """Positions measured forward from the first RL car, modulo ``length``; that car's own
+    entry keeps its position. Unchanged when there is no RL car."""
+    rl = np.flatnonzero(is_rl)
+    if not rl.size:
+        return pos
+    i = int(rl[0])
+    out = np.mod(pos - pos[i], length)
+    out[i] = pos[i]
+    return out
+
+
 class AbsolutePositions:
     """Flow's ``absolute_position`` bookkeeping, over the kernel's vehicle rows.
 
@@ -193,7 +205,11 @@ class AccelEnv(RingAccelBase):
     if cars come or go (zero-padded or cut to the initial count).
 
     Observation: ``2 * num_vehicles`` values in [0, 1]: speeds / the network's max speed,
-    then positions ``get_x_by_id`` / network length, in :attr:`sorted_ids` order.
+    then positions ``get_x_by_id`` / network length, in :attr:`sorted_ids` order. With
+    ``relative_positions: true`` in ``additional_params`` (flowrun's option; Flow has only
+    absolute positions) each position but the first RL car's is measured forward from that
+    car, modulo the length, so its distance to any car ahead is one entry that never jumps
+    when a car passes the network's start; the RL car's own entry stays absolute.
     Action: one acceleration per RL car in ``[-max_decel, max_accel]`` m/s^2, in
     :attr:`sorted_ids` order (extra actions are ignored when fewer RL cars are present).
     Reward: :func:`~flowrun.envs.rewards.desired_velocity` towards ``target_velocity``
@@ -216,6 +232,7 @@ class AccelEnv(RingAccelBase):
         #: ((cars, max speed, length), the observation's divisors)
         self._obs_scale: tuple[tuple[int, float, float], np.ndarray] | None = None
         super().__init__(*args, **kwargs)
+        self._from_rl = bool(self.env_params.additional_params.get("relative_positions"))
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -317,6 +334,8 @@ class AccelEnv(RingAccelBase):
         if self._sorting:
             order = self._order()
             speed, pos = speed[order], pos[order]
+        if self._from_rl:
+            pos = from_first_rl(pos, vk.table.is_rl[self._order()], self.k.network.length())
         # full_observation's divisions as one: each value over its own divisor
         scale = (n, self.k.network.max_speed(), self.k.network.length())
         if self._obs_scale is None or self._obs_scale[0] != scale:
@@ -343,5 +362,5 @@ def desired_velocity_reward(env: Env, fail: bool) -> float:
 
 __all__ = [
     "ADDITIONAL_ENV_PARAMS", "AbsolutePositions", "AccelEnv", "RingAccelBase",
-    "acceleration_box", "clip_unit", "desired_velocity_reward", "fit",
+    "acceleration_box", "clip_unit", "desired_velocity_reward", "fit", "from_first_rl",
 ]  # fmt: skip
