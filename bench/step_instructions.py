@@ -15,9 +15,9 @@ Modes:
          and inserts the placed cars, then only ``simulationStep`` (two per "step") runs, and
          each entering car gets its type's speed and lane-change modes.
     eight, eight_raw  Flow's figureeight0 benchmark (``bench/env_vs_sumo.py``): the env with
-         seeded random actions, and SUMO alone replaying every command the env sent (run
-         ``bench/step_instructions.py eight_record STEPS`` first, as ``step_instructions.sh``
-         does).
+         seeded random actions (drawn before the steps, as many at every run), and SUMO
+         alone replaying every command the env sent (run ``bench/step_instructions.py
+         eight_record STEPS`` first, as ``step_instructions.sh`` does).
     grid, grid_raw  Flow's grid0 benchmark (3x3 lights, 300 veh/h per entering edge):
          ``TrafficLightGridBenchmarkEnv`` with seeded random switch actions, and SUMO alone
          replaying the env's signal states and car modes (``bench/grid_steps.py``; run
@@ -39,6 +39,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from ring import Ring, config, time_floor  # bench/ring.py, beside this file
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+#: the figure eight's random actions drawn in every run of ``eight`` (at least its steps)
+EIGHT_ACTIONS = 2500
 
 
 def figure_eight(mode: str, steps: int) -> None:
@@ -58,7 +60,10 @@ def figure_eight(mode: str, steps: int) -> None:
         assert env.k.process is not None
         env_vs_sumo.replay(env.k.process.api, pickle.loads(log_file.read_bytes())[:steps])
     else:
-        for action in env_vs_sumo.actions(env, steps):
+        # the actions of EIGHT_ACTIONS steps drawn up front, whatever ``steps`` is: their
+        # draws (about 110,000 instructions each) cancel out of the per-step difference, as
+        # env_vs_sumo.py's timing leaves them out; the first ``steps`` are the recorded ones
+        for action in env_vs_sumo.actions(env, max(steps, EIGHT_ACTIONS))[:steps]:
             env.step(action)
     env.close()
 
