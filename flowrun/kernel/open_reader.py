@@ -182,6 +182,8 @@ class OpenReader:
         leader, follower, headway, tailway = following.compute(
             self.table, lane_key, lane_pos, self.route_of
         )
+        if following.links is not None:  # few cars: neighbour speeds picked by the links
+            return following.links.neighbours(speed, headway, tailway)
         return neighbours(speed, leader, follower, headway, tailway, following.complete)
 
     # ------------------------------------------------------------------ population

@@ -9,7 +9,8 @@ occupied lane; elsewhere SUMO's ``getLeader`` (gap minus the ego's ``minGap``, a
 does. Both give the same cars and gaps (``tests/test_open_kernel.py`` compares every car with
 SUMO on every network). For few cars, while every car stays on its lane, the last step's
 order is replayed (checked pair by pair) instead of sorted and walked again: the same
-leaders, the same float operations (``_Plan``).
+leaders, the same float operations (``_Plan``); the rows around every car are kept as index
+arrays while the leaders stay (:class:`~flowrun.kernel.following.Links`).
 
 A car's follower is, as in Flow, the car whose leader it is (Flow's kernel sets
 ``follower`` of each car's leader); where several cars have the same leader (two lanes
@@ -21,12 +22,18 @@ merge) or look less far back.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from flowrun.kernel.following import SMALL, followers_small, leaders_by_lane, leaders_small
+from flowrun.kernel.following import (
+    SMALL,
+    Links,
+    followers_small,
+    leaders_by_lane,
+    leaders_small,
+)
 from flowrun.kernel.lane_graph import LaneGraph
 from flowrun.kernel.population import Population
 from flowrun.types import FloatArray, IntArray
@@ -54,6 +61,8 @@ class Following:
         complete: the last :meth:`compute` found a leader and a follower for every car
             (then each car is the leader of exactly one car, so the tailways are the
             followers' headways; known only for few cars, else ``False``).
+        links: the last :meth:`compute`'s :class:`~flowrun.kernel.following.Links` when it
+            had few cars (``None`` otherwise), made again only when a car's leader changed.
     """
 
     def __init__(
@@ -70,6 +79,8 @@ class Following:
         self._next_of: dict[tuple[str, int], tuple[tuple[str, ...] | None, int]] = {}
         #: the last small compute's order (see :class:`_Plan`)
         self._plan: _Plan | None = None
+        #: the last small compute's links (``None`` after a compute of many cars)
+        self.links: Links | None = None
 
     @classmethod
     def of(cls, api: Any, graph: LaneGraph | None = None,
@@ -108,33 +119,22 @@ class Following:
             pairs = [(i, j) for i, j in enumerate(leader) if j >= 0]
             steps = self._look_ahead(pop, keys, pos_l, len_l, fronts, rears, leader, headway,
                                      routes)  # fmt: skip
-            plan = self._plan = None if steps is None else _Plan(pop.version, keys, pairs, steps)
+            self._plan = None if steps is None else _Plan(pop.version, keys, pairs, steps)
         else:
             leader, headway = found
-        if plan is not None and plan.complete and leader == plan.leader:
-            follower_l = plan.follower  # the same leaders, each car leading one: same followers
-        else:
-            follower_l, tailway_l = followers_small(leader, headway)
-            complete = -1 not in leader and -1 not in follower_l
-            if plan is not None:
-                plan.leader, plan.follower, plan.complete = leader, follower_l, complete
-            if not complete:
-                self.complete = False
-                return (np.array(leader, np.int64), np.array(follower_l, np.int64),
-                        np.array(headway, np.float64), np.array(tailway_l, np.float64))  # fmt: skip
-        # everyone led and followed: each car leads exactly one, whose headway is its tailway
-        self.complete = True
-        n = len(keys)
-        leader_a = np.fromiter(leader, np.int64, n)
-        follower_a = np.fromiter(follower_l, np.int64, n)
-        headway_a = np.fromiter(headway, np.float64, n)
-        return leader_a, follower_a, headway_a, headway_a[follower_a]
+        links = self.links
+        if links is None or not links.one_to_one or leader != links.leader_rows:
+            # (with the same leaders, each car leading one at most, the followers are the same)
+            links = self.links = Links.of(leader, followers_small(leader, headway)[0])
+        self.complete = links.complete
+        headway_a = np.fromiter(headway, np.float64, len(keys))
+        return links.leader, links.follower, headway_a, links.tailway(headway_a)
 
     def _compute_many(self, pop: Population, keys: list[int], lane_key: IntArray,
                       lane_pos: FloatArray, routes: Mapping[str, tuple[str, ...]] | None,
                       ) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:  # fmt: skip
         """:meth:`compute` on arrays, for many cars."""
-        self._plan = None
+        self._plan = self.links = None
         leader, _, headway, fronts, rears = leaders_by_lane(lane_key, lane_pos, pop.lengths)
         self._look_ahead(pop, keys, lane_pos.tolist(), pop.lengths.tolist(), fronts.tolist(),
                          rears.tolist(), leader, headway, routes)  # fmt: skip
@@ -251,16 +251,12 @@ class _Plan:
         version: the population's version; keys: every car's lane key.
         pairs: (car, the car ahead on its lane), every such pair.
         steps: what the look past each lane's end found.
-        leader, follower, complete: the last leaders, followers, and whether everyone had both.
     """
 
     version: int
     keys: list[int]
     pairs: list[tuple[int, int]]
     steps: list[_Step]
-    leader: list[int] = field(default_factory=list)
-    follower: list[int] = field(default_factory=list)
-    complete: bool = False
 
     def holds(self, pop: Population, keys: list[int],
               routes: Mapping[str, tuple[str, ...]]) -> bool:  # fmt: skip

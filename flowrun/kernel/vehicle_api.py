@@ -60,7 +60,8 @@ class FlowVehicleGetters:
     def __init__(self) -> None:
         #: vehicles an environment marked as observed, in order
         self._observed: dict[str, None] = {}
-        self._leader_ids: tuple[np.ndarray | None, list[str]] = (None, [])
+        #: (the leader rows, the ids they were read with, their leaders' ids)
+        self._leader_ids: tuple[np.ndarray | None, list[str] | None, list[str]] = (None, None, [])
         self._initial_row_cache: dict[str, int] | None = None
 
     # ------------------------------------------------------------------ Flow's getters
@@ -285,14 +286,13 @@ class FlowVehicleGetters:
         return self.table.ids[j] if j >= 0 else None
 
     def leader_ids(self) -> list[str]:
-        """Leader id of every vehicle (``""`` without leader); reused while the order holds."""
-        if self._leader_ids[0] is not self.state.leader:
-            ids = self.table.ids
-            self._leader_ids = (
-                self.state.leader,
-                [ids[j] if j >= 0 else "" for j in self.state.leader.tolist()],
-            )
-        return self._leader_ids[1]
+        """Leader id of every vehicle (``""`` without leader); reused while the order holds
+        (the same rows, of the same cars: a reader keeps its leader rows while they stay,
+        and the population's ids are a new list whenever cars come or go)."""
+        leader, ids = self.state.leader, self.table.ids
+        if self._leader_ids[0] is not leader or self._leader_ids[1] is not ids:
+            self._leader_ids = (leader, ids, [ids[j] if j >= 0 else "" for j in leader.tolist()])
+        return self._leader_ids[2]
 
     def get_follower(self, veh_id: str) -> str | None:
         """Id of the vehicle behind (in the lane, or before its start), or ``None``."""

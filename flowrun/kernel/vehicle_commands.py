@@ -19,6 +19,7 @@ import numpy as np
 
 from flowrun.kernel.following import SMALL
 from flowrun.kernel.vehicle_api import ERROR
+from flowrun.types import FloatArray, IntArray
 
 if TYPE_CHECKING:
     from flowrun.kernel.open_reader import OpenReader
@@ -166,6 +167,11 @@ class VehicleCommands:
             accs = np.broadcast_to(flat, (len(veh_ids),))
         for vid, a in zip(veh_ids, accs, strict=True):
             self.accel_cmd[self.table.row(vid)] = a
+
+    def apply_acceleration_rows(self, rows: IntArray, acc: FloatArray) -> None:
+        """:meth:`apply_acceleration` by kernel row: ``acc[i]`` (m/s^2) to the car of
+        ``rows[i]`` (distinct rows), whatever lane it is on."""
+        self.accel_cmd[rows] = acc
 
     def apply_acceleration_idx(self, idx: np.ndarray | slice, acc: np.ndarray) -> None:
         """Command accelerations by vehicle index (the vectorised path controllers use).

@@ -24,6 +24,7 @@ from flowrun.envs.ring.tasks import (
     full_observation,
 )
 from flowrun.flow_values import FLOW_ERROR
+from flowrun.types import IntArray
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
     # maximum acceleration of the RL cars, m/s^2
@@ -225,8 +226,8 @@ class AccelEnv(RingAccelBase):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self._positions = AbsolutePositions()
         self._observed_version: tuple[Any, int] | None = None
-        #: (the population and its version, the RL cars' ids then), when not sorting
-        self._rl_cache: tuple[tuple[Any, int], list[str]] | None = None
+        #: (the population and its version, the RL cars' rows then), when not sorting
+        self._rl_cache: tuple[tuple[Any, int], IntArray] | None = None
         #: the observed cars' count (the initial vehicles'), found at the first observation
         self._num_observed: int | None = None
         #: ((cars, max speed, length), the observation's divisors)
@@ -303,26 +304,28 @@ class AccelEnv(RingAccelBase):
             self._positions.update(vk, self.k.network.length())
 
     # ------------------------------------------------------------------ Flow's hooks
-    def _rl_ids(self) -> list[str]:
-        """The RL cars' ids in :attr:`sorted_ids` order (kept while the rows are)."""
+    def _rl_rows(self) -> IntArray:
+        """The RL cars' kernel rows in :attr:`sorted_ids` order (kept while the rows are)."""
         vk = self.k.vehicle
         table = vk.table
         if self._sorting:
             rows = np.argsort(self._positions.of_rows(vk), kind="stable")
-            return [table.ids[i] for i in rows[table.is_rl[rows]].tolist()]
+            return rows[table.is_rl[rows]]
         key = (table, table.version)
         if self._rl_cache is None or self._rl_cache[0] != key:
-            ids = table.ids
-            self._rl_cache = (key, [ids[i] for i in table.is_rl.nonzero()[0].tolist()])
+            self._rl_cache = (key, table.is_rl.nonzero()[0])
         return self._rl_cache[1]
 
     def _apply_rl_actions(self, rl_actions: Any) -> None:
-        rl_ids = self._rl_ids()
-        actions = np.asarray(rl_actions, dtype=np.float64).reshape(-1)
-        n = min(len(rl_ids), actions.size)
-        if n:
-            self.k.vehicle.apply_acceleration(rl_ids if n == len(rl_ids) else rl_ids[:n],
-                                              actions[:n])  # fmt: skip
+        rows = self._rl_rows()
+        actions = np.asarray(rl_actions, dtype=np.float64)
+        if actions.ndim != 1:
+            actions = actions.reshape(-1)
+        n = min(rows.size, actions.size)
+        if n == rows.size == actions.size:  # (the common case: no slicing)
+            self.k.vehicle.apply_acceleration_rows(rows, actions)
+        elif n:
+            self.k.vehicle.apply_acceleration_rows(rows[:n], actions[:n])
 
     def get_state(self) -> Any:
         """Speeds / max speed, then positions / length, in :attr:`sorted_ids` order, in [0, 1]."""
