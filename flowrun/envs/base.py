@@ -364,7 +364,7 @@ class Env(EnvOutput, gymnasium.Env, metaclass=ABCMeta):
         speed = self.k.vehicle.speed
         return {
             "crash": crash,
-            "mean_speed": float(speed.sum()) / speed.size if speed.size else 0.0,
+            "mean_speed": float(np.add.reduce(speed)) / speed.size if speed.size else 0.0,
             "collisions": self.k.simulation.collisions,
             "teleports": self.k.simulation.teleports,
             "time": self.k.simulation.time,

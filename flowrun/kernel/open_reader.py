@@ -31,6 +31,7 @@ if TYPE_CHECKING:
 _flatten = chain.from_iterable
 
 NO_ROWS = np.zeros(0, dtype=np.int64)
+NO_ROWS.flags.writeable = False
 NEVER = -(10**18)  # a clock no step has
 
 
@@ -80,6 +81,8 @@ class OpenReader:
         self._step_ms = round(dt * 1000)
         self._prev_key = NO_ROWS
         self._prev_pos = np.zeros(0)
+        #: the same as lists when the last read was of few cars (``None``: not kept)
+        self._prev_lists: tuple[list[int], list[float]] | None = None
         #: ContinuousRouter must look at the cars again (see :meth:`route`)
         self._route_due = True
 
@@ -139,28 +142,36 @@ class OpenReader:
         """
         fast, lanes, ids = self.fast, self.lanes, self.table.ids
         n = len(ids)
-        prev_key = self._prev_key
+        prev_key, lists = self._prev_key, self._prev_lists
+        self._prev_lists = None
         if self._place_ms == self._now_ms - self._step_ms and prev_key.size == n:
-            keys = prev_key.copy()
             # (a new row's key is -1: alone[-1] is False)
             if n <= SMALL:  # the same test on lists: fewer numpy calls (a per-call cost)
+                key_l, prev_l = lists if lists is not None else (
+                    prev_key.tolist(), self._prev_pos.tolist())  # fmt: skip
                 pos_l = list(map(fast.get_lane_position, ids))
                 pos = np.array(pos_l, np.float64)
                 dt, alone = self.dt, lanes.alone_l
-                moved = [r for r, p, q, v, k in zip(range(n), pos_l, self._prev_pos.tolist(),
-                                                    speed.tolist(), prev_key.tolist(), strict=True)
+                moved = [r for r, p, q, v, k in zip(range(n), pos_l, prev_l, speed.tolist(),
+                                                    key_l, strict=True)
                          if not (p == q + v * dt and alone[k])]  # fmt: skip
             else:
                 pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
                 same = (pos == self._prev_pos + speed * self.dt) & lanes.alone[prev_key]
                 moved = (~same).nonzero()[0].tolist()  # (np.flatnonzero: a Python layer)
+            keys = prev_key  # every car on its lane: the last step's array (read-only)
             if moved:
                 get_lane = fast.get_lane_id
+                keys = prev_key.copy()
                 keys[moved] = lanes.keys([get_lane(ids[r]) for r in moved])
+                keys.flags.writeable = False
                 self._route_due = True  # (a car may be on another edge)
+            if n <= SMALL:
+                self._prev_lists = (keys.tolist() if moved else key_l, pos_l)
         else:
             pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
             keys = lanes.keys(list(map(fast.get_lane_id, ids)))
+            keys.flags.writeable = False
             self._route_due = True
         self._prev_key, self._prev_pos = keys, pos.copy()  # (lane_pos is the caller's array)
         self._place_ms = self._now_ms
@@ -239,11 +250,13 @@ class OpenReader:
         self.route_end = np.where(kept, old_route_end[carried] if old_route_end.size else -1, -1)
         if self._prev_key.size == old_route_end.size:  # the last places, row by row
             old_key, old_pos = self._prev_key, self._prev_pos
-            self._prev_key = np.where(kept, old_key[carried], -1) if old_key.size else src
+            self._prev_key = np.where(kept, old_key[carried], -1) if old_key.size else src.copy()
+            self._prev_key.flags.writeable = False  # (a step may hand it out as its lane keys)
             self._prev_pos = np.where(kept, old_pos[carried], np.nan) if old_pos.size else \
                 np.full(n, np.nan)  # fmt: skip
         else:
             self._place_ms = NEVER
+        self._prev_lists = None
         rows = (~kept | (self.route_end < 0)).nonzero()[0]
         get_route = self.api.vehicle.getRoute
         for r in rows.tolist():

@@ -32,6 +32,8 @@ from flowrun.types import BoolArray, CarFollowingInputs, FloatArray, IntArray
 
 __all__ = ["VehicleKernel", "ring_fast_path"]
 
+_Facts = tuple[FloatArray, FloatArray, FloatArray]
+
 
 def _of_state(name: str) -> Any:
     """A read-only kernel attribute that is the field ``name`` of the step's state (a
@@ -77,6 +79,8 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self.read_xy = True
         self.api: Any = None
         self._fast: FastCalls | None = None
+        #: (first row, end row) of a group -> (population, its version, the group's facts)
+        self._facts_of: dict[tuple[int, int], tuple[Population, int, _Facts]] = {}
         VehicleCommands.__init__(self, initial.size)
         FlowVehicleGetters.__init__(self)
 
@@ -139,6 +143,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
                 s.speed, s.headway, s.leader_speed, s.follower_headway, s.follower_speed,
                 s.speed_limit, self.dt, time, t.accels, t.decels, t.lengths,
             )  # fmt: skip
+        max_accel, max_decel, length = self._group_facts(idx)
         return CarFollowingInputs(
             speed=s.speed[idx],
             headway=s.headway[idx],
@@ -148,10 +153,25 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             speed_limit=s.speed_limit[idx],
             dt=self.dt,
             time=time,
-            max_accel=t.accels[idx],
-            max_decel=t.decels[idx],
-            length=t.lengths[idx],
+            max_accel=max_accel,
+            max_decel=max_decel,
+            length=length,
         )
+
+    def _group_facts(self, idx: np.ndarray | slice) -> _Facts:
+        """The maximum accelerations, decelerations and lengths of the cars ``idx``; of a
+        group's contiguous rows, sliced once per population (read-only views)."""
+        t = self.table
+        if not isinstance(idx, slice):
+            return t.accels[idx], t.decels[idx], t.lengths[idx]
+        cached = self._facts_of.get((idx.start, idx.stop))
+        if cached is not None and cached[0] is t and cached[1] == t.version:
+            return cached[2]
+        facts = (t.accels[idx], t.decels[idx], t.lengths[idx])
+        for view in facts:
+            view.flags.writeable = False
+        self._facts_of[idx.start, idx.stop] = (t, t.version, facts)
+        return facts
 
     # ------------------------------------------------------------------ the network
     @property

@@ -52,9 +52,12 @@ def from_first_rl(pos: np.ndarray, is_rl: np.ndarray, length: float) -> np.ndarr
     """Positions measured forward from the first RL car, modulo ``length``; that car's own
     entry keeps its position. Unchanged when there is no RL car."""
     rl = np.flatnonzero(is_rl)
-    if not rl.size:
-        return pos
-    i = int(rl[0])
+    return from_entry(pos, int(rl[0]), length) if rl.size else pos
+
+
+def from_entry(pos: np.ndarray, i: int, length: float) -> np.ndarray:
+    """Positions measured forward from entry ``i``'s, modulo ``length``; entry ``i`` keeps
+    its own position."""
     out = np.mod(pos - pos[i], length)
     out[i] = pos[i]
     return out
@@ -234,6 +237,7 @@ class AccelEnv(RingAccelBase):
         self._obs_scale: tuple[tuple[int, float, float], np.ndarray] | None = None
         super().__init__(*args, **kwargs)
         self._from_rl = bool(self.env_params.additional_params.get("relative_positions"))
+        self._sorting = bool(self.env_params.additional_params.get("sort_vehicles"))
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -244,10 +248,6 @@ class AccelEnv(RingAccelBase):
         if self._sorting:
             obs = self._format_obs(self.get_state())
         return obs, info
-
-    @property
-    def _sorting(self) -> bool:
-        return bool(self.env_params.additional_params.get("sort_vehicles"))
 
     # ------------------------------------------------------------------ Flow's bookkeeping
     @property
@@ -337,8 +337,11 @@ class AccelEnv(RingAccelBase):
         if self._sorting:
             order = self._order()
             speed, pos = speed[order], pos[order]
-        if self._from_rl:
+        if self._from_rl and self._sorting:
             pos = from_first_rl(pos, vk.table.is_rl[self._order()], self.k.network.length())
+        elif self._from_rl:  # (observed in row order: the first RL row, kept while the rows are)
+            rl = self._rl_rows()
+            pos = from_entry(pos, int(rl[0]), self.k.network.length()) if rl.size else pos
         # full_observation's divisions as one: each value over its own divisor
         scale = (n, self.k.network.max_speed(), self.k.network.length())
         if self._obs_scale is None or self._obs_scale[0] != scale:
@@ -365,5 +368,6 @@ def desired_velocity_reward(env: Env, fail: bool) -> float:
 
 __all__ = [
     "ADDITIONAL_ENV_PARAMS", "AbsolutePositions", "AccelEnv", "RingAccelBase",
-    "acceleration_box", "clip_unit", "desired_velocity_reward", "fit", "from_first_rl",
+    "acceleration_box", "clip_unit", "desired_velocity_reward", "fit", "from_entry",
+    "from_first_rl",
 ]  # fmt: skip
