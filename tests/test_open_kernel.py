@@ -328,12 +328,13 @@ def test_leaders_replayed_from_the_last_step_equal_a_fresh_search_bit_for_bit(na
         compute = following.compute
         replayed = steps = 0
 
-        def checked(pop: Any, lane_key: Any, lane_pos: Any, routes: Any = None) -> Any:
+        def checked(pop: Any, lane_key: Any, lane_pos: Any, routes: Any = None,
+                    lists: Any = None) -> Any:  # fmt: skip
             nonlocal replayed, steps
             plan = following._plan
             fresh = Following(following._get_leader, graph, edge_pos)
             want = fresh.compute(pop, lane_key, lane_pos, routes)
-            got = compute(pop, lane_key, lane_pos, routes)
+            got = compute(pop, lane_key, lane_pos, routes, lists)
             for a, b in zip(got, want, strict=True):
                 assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
             assert following.complete == fresh.complete

@@ -81,8 +81,9 @@ class OpenReader:
         self._step_ms = round(dt * 1000)
         self._prev_key = NO_ROWS
         self._prev_pos = np.zeros(0)
-        #: the same as lists when the last read was of few cars (``None``: not kept)
-        self._prev_lists: tuple[list[int], list[float]] | None = None
+        #: the last read's lane keys and positions as handed out and as lists, when it was of
+        #: few cars and every car had been read the step before (``None``: not kept)
+        self._lists: tuple[IntArray, FloatArray, list[int], list[float]] | None = None
         #: ContinuousRouter must look at the cars again (see :meth:`route`)
         self._route_due = True
 
@@ -142,12 +143,12 @@ class OpenReader:
         """
         fast, lanes, ids = self.fast, self.lanes, self.table.ids
         n = len(ids)
-        prev_key, lists = self._prev_key, self._prev_lists
-        self._prev_lists = None
+        prev_key, lists = self._prev_key, self._lists
+        self._lists = None
         if self._place_ms == self._now_ms - self._step_ms and prev_key.size == n:
             # (a new row's key is -1: alone[-1] is False)
             if n <= SMALL:  # the same test on lists: fewer numpy calls (a per-call cost)
-                key_l, prev_l = lists if lists is not None else (
+                key_l, prev_l = lists[2:] if lists is not None else (
                     prev_key.tolist(), self._prev_pos.tolist())  # fmt: skip
                 pos_l = list(map(fast.get_lane_position, ids))
                 pos = np.array(pos_l, np.float64)
@@ -167,7 +168,7 @@ class OpenReader:
                 keys.flags.writeable = False
                 self._route_due = True  # (a car may be on another edge)
             if n <= SMALL:
-                self._prev_lists = (keys.tolist() if moved else key_l, pos_l)
+                self._lists = (keys, pos, keys.tolist() if moved else key_l, pos_l)
         else:
             pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
             keys = lanes.keys(list(map(fast.get_lane_id, ids)))
@@ -189,9 +190,10 @@ class OpenReader:
 
     def following(self, speed: FloatArray, lane_key: IntArray, lane_pos: FloatArray) -> Neighbours:
         """Leader, follower, headway, tailway and neighbour speeds of the current step."""
-        following = self._following
+        following, lists = self._following, self._lists
+        known = lists[2:] if lists and lists[0] is lane_key and lists[1] is lane_pos else None
         leader, follower, headway, tailway = following.compute(
-            self.table, lane_key, lane_pos, self.route_of
+            self.table, lane_key, lane_pos, self.route_of, known
         )
         if following.links is not None:  # few cars: neighbour speeds picked by the links
             return following.links.neighbours(speed, headway, tailway)
@@ -256,7 +258,7 @@ class OpenReader:
                 np.full(n, np.nan)  # fmt: skip
         else:
             self._place_ms = NEVER
-        self._prev_lists = None
+        self._lists = None
         rows = (~kept | (self.route_end < 0)).nonzero()[0]
         get_route = self.api.vehicle.getRoute
         for r in rows.tolist():

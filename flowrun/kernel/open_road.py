@@ -81,6 +81,8 @@ class Following:
         self._plan: _Plan | None = None
         #: the last small compute's links (``None`` after a compute of many cars)
         self.links: Links | None = None
+        #: the population's lengths array and the same as a list
+        self._lengths: tuple[FloatArray, list[float]] | None = None
 
     @classmethod
     def of(cls, api: Any, graph: LaneGraph | None = None,
@@ -97,6 +99,7 @@ class Following:
         lane_key: IntArray,
         lane_pos: FloatArray,
         routes: Mapping[str, tuple[str, ...]] | None = None,
+        lists: tuple[list[int], list[float]] | None = None,
     ) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
         """Leader, follower, headway and tailway of every live car.
 
@@ -105,12 +108,14 @@ class Following:
             lane_key: each car's lane (:class:`~flowrun.kernel.lanes.LaneTable` key).
             lane_pos: each car's front-bumper position on its lane, m.
             routes: each car's route by id (lets the lane graph answer; SUMO otherwise).
+            lists: ``lane_key`` and ``lane_pos`` as lists, when the caller has them.
         """
-        keys = lane_key.tolist()
+        keys = lane_key.tolist() if lists is None else lists[0]
         if len(keys) > SMALL:
             return self._compute_many(pop, keys, lane_key, lane_pos, routes)
         # lists: fewer numpy calls (a per-call cost) for few cars
-        pos_l, len_l = lane_pos.tolist(), pop.lengths.tolist()
+        pos_l = lane_pos.tolist() if lists is None else lists[1]
+        len_l = self._lengths_of(pop)
         plan, found = self._plan, None
         if plan is not None and routes is not None and plan.holds(pop, keys, routes):
             found = self._replay(plan, pop, pos_l, len_l)
@@ -129,6 +134,12 @@ class Following:
         self.complete = links.complete
         headway_a = np.fromiter(headway, np.float64, len(keys))
         return links.leader, links.follower, headway_a, links.tailway(headway_a)
+
+    def _lengths_of(self, pop: Population) -> list[float]:
+        """The cars' lengths as a list (made again when the population's rows change)."""
+        if self._lengths is None or self._lengths[0] is not pop.lengths:
+            self._lengths = (pop.lengths, pop.lengths.tolist())
+        return self._lengths[1]
 
     def _compute_many(self, pop: Population, keys: list[int], lane_key: IntArray,
                       lane_pos: FloatArray, routes: Mapping[str, tuple[str, ...]] | None,
