@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import secrets
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
 from flowrun.errors import RecordingError
@@ -59,13 +59,15 @@ def new_file(dst: Path, what: str) -> Iterator[Path]:
     if dst.name in ("", ".", ".."):
         raise RecordingError(f"{dst} is not a file name; give {what} a file path")
     tmp = dst.parent / f".{dst.name}.{os.getpid()}.{secrets.token_hex(4)}{PARTIAL_SUFFIX}"
+    # the name is this process's alone (pid + random), so the cleanup below may remove it
+    # whatever happened: an interruption landing just after its creation included
     try:
-        dst.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "xb"):
-            pass
-    except OSError as err:
-        raise RecordingError(f"cannot write {what} to {dst}: {_reason(err)}") from None
-    try:
+        try:
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            with open(tmp, "xb"):
+                pass
+        except OSError as err:
+            raise RecordingError(f"cannot write {what} to {dst}: {_reason(err)}") from None
         try:
             yield tmp
         except OSError as err:
@@ -77,4 +79,5 @@ def new_file(dst: Path, what: str) -> Iterator[Path]:
         except OSError as err:
             raise RecordingError(f"cannot write {what} to {dst}: {_reason(err)}") from None
     finally:
-        tmp.unlink(missing_ok=True)
+        with suppress(OSError):  # a folder that could not be made holds no partial file
+            tmp.unlink()
