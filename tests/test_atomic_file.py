@@ -38,7 +38,9 @@ def test_interrupt_right_after_the_partial_is_created_leaves_nothing(
 def test_folder_that_cannot_be_made_is_one_recording_error(tmp_path: Path) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("")
-    with pytest.raises(RecordingError, match="cannot write the export to"):
-        with atomic.new_file(blocker / "out.csv", "the export"):
-            pass
+    with (
+        pytest.raises(RecordingError, match="cannot write the export to"),
+        atomic.new_file(blocker / "out.csv", "the export"),
+    ):
+        pass
     assert [p.name for p in tmp_path.iterdir()] == ["file"]
