@@ -203,11 +203,28 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
     from flowrun.rundir.folders import Interrupted
 
+    received: list[int] = []
+
     def handler(signum: int, frame: Any) -> None:
+        received.append(signum)
         raise Interrupted(signum)
 
-    with on_stop_signals(handler):
-        yield
+    previous_hook = sys.unraisablehook
+
+    def unraisable(args: Any) -> None:
+        # the signal landed in a callback whose exceptions Python ignores (a garbage
+        # collector's weakref callback, a __del__): raised again below, without the noise
+        if not isinstance(args.exc_value, Interrupted):
+            previous_hook(args)
+
+    sys.unraisablehook = unraisable
+    try:
+        with on_stop_signals(handler):
+            yield
+            if received:  # the work went on after an ignored interruption: stop now
+                raise Interrupted(received[0])
+    finally:
+        sys.unraisablehook = previous_hook
 
 
 @contextmanager
