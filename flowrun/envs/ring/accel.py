@@ -337,8 +337,8 @@ class AccelEnv(RingAccelBase):
         if self._sorting:
             order = self._order()
             speed, pos = speed[order], pos[order]
-        if self._from_rl and self._sorting:
-            pos = from_first_rl(pos, vk.table.is_rl[self._order()], self.k.network.length())
+            if self._from_rl:
+                pos = from_first_rl(pos, vk.table.is_rl[order], self.k.network.length())
         elif self._from_rl:  # (observed in row order: the first RL row, kept while the rows are)
             rl = self._rl_rows()
             pos = from_entry(pos, int(rl[0]), self.k.network.length()) if rl.size else pos

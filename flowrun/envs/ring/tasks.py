@@ -160,7 +160,6 @@ class RingActions:
         return np.minimum(np.maximum(a, self.low), self.high) if clip else a
 
 
-
 class RingTask:
     """A ring task: its spaces, and its actions, observation and reward of a batch of rings.
 
