@@ -233,7 +233,7 @@ def test_results_hold_mean_and_std_over_seeds_and_missing_runs(tmp_path: Path) -
     assert [r["status"] for r in merge["baseline"]["runs"]] == ["complete", "complete", "missing"]
     assert grid["baseline"]["mean"] is None and grid["reference"] is None
     assert mean_std(merge["baseline"]) == "11 ± 1 (n=2)"
-    assert notes(rows)[0].startswith("* grid0: Flow's benchmarks/create_movies.sh")
+    assert notes(rows)[0].startswith("* grid0: Flow's flow/benchmarks/create_movies.sh")
     json_path, md_path, plot = write_results(plan, rows, ["flowrun", "benchmark"], "interrupted")
     data = json.loads(json_path.read_text())
     assert data["status"] == "interrupted" and data["seeds"] == [0, 1, 2]

@@ -88,7 +88,7 @@ class Benchmark:
         name: Flow's name (``figureeight0``), also the config's file name and ``name:``.
         family: ``figureeight``, ``merge``, ``grid`` or ``bottleneck``.
         metric: how it is scored.
-        reference: the score ``benchmarks/create_movies.sh`` checks a trained policy against
+        reference: the score ``flow/benchmarks/create_movies.sh`` checks a trained policy against
             (it passes at 95 %); ``None`` where Flow has no usable one.
         reference_note: why there is none, or ``""`` (tables show ``none *`` and the note).
         baseline: the ``--set`` overrides that turn the config into Flow's baseline.
@@ -107,8 +107,8 @@ class Benchmark:
 
 
 _GRID_NOTE = (
-    "Flow's benchmarks/create_movies.sh checks grid0/grid1 against 296, a number it reads from "
-    "the visualizer's outflow line (rew=${outflow_arr[3]}), not from the return: no -delay "
+    "Flow's flow/benchmarks/create_movies.sh checks grid0/grid1 against 296, a number it reads "
+    "from the visualizer's outflow line (rew=${outflow_arr[3]}), not from the return: no -delay "
     "reference exists"
 )
 _EVAL = "env.evaluate=true"

@@ -79,7 +79,7 @@ def write_results(
         *("| " + " | ".join(c.replace("|", "\\|") for c in line) + " |" for line in cells),
         "",
         "Baseline: Flow's non-RL baseline of each benchmark (flow/benchmarks/baselines/), "
-        "mean ± std over the seeds. Flow's reference: the score benchmarks/create_movies.sh "
+        "mean ± std over the seeds. Flow's reference: the score flow/benchmarks/create_movies.sh "
         "expects of a trained policy (it passes at 95 %).",
         *(["", *notes(rows)] if notes(rows) else []),
         "",
