@@ -15,11 +15,12 @@ if TYPE_CHECKING:
 
 
 def check_additional_params(cls: type, env_params: EnvParams) -> None:
-    """Report a key one edit off a declared one (a typo: Flow's other keys are free-form),
-    then every key of ``cls.ADDITIONAL_ENV_PARAMS`` missing from ``env_params``."""
+    """Report a key one edit off a declared or optional one (a typo: Flow's other keys are
+    free-form), then every key of ``cls.ADDITIONAL_ENV_PARAMS`` missing from ``env_params``."""
     declared = getattr(cls, "ADDITIONAL_ENV_PARAMS", {}) or {}
+    known = [*declared, *(getattr(cls, "OPTIONAL_ENV_PARAMS", {}) or {})]
     for key in env_params.additional_params:
-        near = [k for k in declared if key not in declared and one_edit_apart(str(key), k)]
+        near = [k for k in known if key not in known and one_edit_apart(str(key), k)]
         if near:
             raise ConfigError(
                 f"unknown parameter of {cls.__name__} (did you mean '{near[0]}'?); keys it "

@@ -73,6 +73,10 @@ class Env(EnvOutput, gymnasium.Env, metaclass=ABCMeta):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - gymnasium's
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = {}
+    #: ``additional_params`` keys the env reads when given, with the default it uses when
+    #: not (flowrun's options and Flow's optional keys): no config needs them, but a key one
+    #: edit off one of them is refused as a typo.
+    OPTIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = {}
     #: The experiment this env comes with, which ``gymnasium.make("flowrun/<Name>-v0")`` runs
     #: without a config: a file of the repository's ``configs/`` folder (see
     #: :func:`flowrun.envs.factory.default_experiment`); ``None``: Flow's ring task.

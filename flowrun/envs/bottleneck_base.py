@@ -148,6 +148,18 @@ class TollBooth:
             k.traffic_light.set_state("2", state)
 
 
+#: Flow's optional ``additional_params`` of the ramp meter, with its defaults: the critical
+#: number of cars on edge ``4``, the metered flow's bounds (veh/h), the update period (s) and
+#: the feedback gain
+RAMP_METER_PARAMS: dict[str, float] = {
+    "n_crit": 8,
+    "q_max": 1100,
+    "q_min": 0.25 * 1100,
+    "feedback_update": 15,
+    "feedback_coeff": 20,
+}
+
+
 class RampMeter:
     """Flow's ALINEA ramp meter on node ``3`` (Spiliopoulou, Papamichail, Papageorgiou,
     "Toll plaza merging traffic control for throughput maximization", J. Transp. Eng. 2009).
@@ -160,11 +172,12 @@ class RampMeter:
 
     def __init__(self, scaling: int, dt: float, params: dict[str, Any]) -> None:
         self.dt = dt
-        self.n_crit = float(params.get("n_crit", 8))
-        self.q_max = float(params.get("q_max", 1100))
-        self.q_min = float(params.get("q_min", 0.25 * 1100))
-        self.feedback_update = float(params.get("feedback_update", 15))
-        self.feedback_coeff = float(params.get("feedback_coeff", 20))
+        p = {**RAMP_METER_PARAMS, **params}
+        self.n_crit = float(p["n_crit"])
+        self.q_max = float(p["q_max"])
+        self.q_min = float(p["q_min"])
+        self.feedback_update = float(p["feedback_update"])
+        self.feedback_coeff = float(p["feedback_coeff"])
         self.q = self.q_min
         self.cycle_time, self.green_time, self.timer = 6.0, 4.0, 0.0
         n = MAX_LANES * scaling
@@ -208,6 +221,7 @@ class BottleneckEnv(Env):
     DEFAULT_EXPERIMENT = "benchmarks/bottleneck0.yaml"
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
+    OPTIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = RAMP_METER_PARAMS
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)

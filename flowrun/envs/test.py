@@ -10,7 +10,7 @@ Flow's non-RL example configs run on it. It has no actions and no observations.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium
 import numpy as np
@@ -22,6 +22,7 @@ class TestEnv(Env):
     """An environment that only runs the human drivers (see the module docstring)."""
 
     DEFAULT_EXPERIMENT = "envs/ring.yaml"
+    OPTIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = {"reward_fn": None}
 
     __test__ = False  # not a pytest test class despite its name
 

@@ -64,6 +64,7 @@ class I210MultiEnv(MultiAgentEnv):
     """
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
+    OPTIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = {"lead_obs": True}
 
     @property
     def _lead_obs(self) -> bool:

@@ -224,6 +224,7 @@ class AccelEnv(RingAccelBase):
     DEFAULT_EXPERIMENT = "envs/ring.yaml"
 
     ADDITIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = ADDITIONAL_ENV_PARAMS
+    OPTIONAL_ENV_PARAMS: ClassVar[dict[str, Any]] = {"relative_positions": False}
     RING_TASK: ClassVar[type[RingTask]] = AccelTask
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
