@@ -54,16 +54,17 @@ def idm_accel(
     # (a product with a factor of exactly 1 is skipped: x * 1.0 is x, bit for bit)
     headway_term = v if T == 1.0 else v * T
     v0_, two_sqrt_ab, delta_, s0_ = _idm_constants(v0, a, b, delta, s0)
-    s_star = s0_ + np.maximum(_ZERO, headway_term + v * (v - v_lead) / two_sqrt_ab)
+    s_star = s0_ + np.maximum(ZERO, headway_term + v * (v - v_lead) / two_sqrt_ab)
     # Without a leader h = inf, so s*/h = 0 and the interaction term vanishes (Flow: s* = 0).
     interaction = np.square(s_star / np.maximum(h, _MIN_GAP))
-    accel = _ONE - (v / v0_) ** delta_ - interaction
+    accel = ONE - (v / v0_) ** delta_ - interaction
     return accel if a == 1.0 else a * accel
 
 
 #: 0, 1 and MIN_GAP as 0-d float64 arrays: a ufunc takes them as they are, while it converts
-#: a Python float at every call (0.40 against 0.25 µs for an operation on 13 cars)
-_ZERO, _ONE, _MIN_GAP = np.array(0.0), np.array(1.0), np.array(MIN_GAP)
+#: a Python float at every call (0.40 against 0.25 µs for an operation on 13 cars); the ring
+#: tasks (:mod:`flowrun.envs.ring.tasks`) use ZERO and ONE too
+ZERO, ONE, _MIN_GAP = np.array(0.0), np.array(1.0), np.array(MIN_GAP)
 
 
 @functools.lru_cache(maxsize=64)
@@ -71,7 +72,7 @@ def _idm_constants(
     v0: float, a: float, b: float, delta: float, s0: float
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """IDM's ``v0``, ``2 * sqrt(a * b)``, ``delta`` and ``s0`` as 0-d float64 arrays (the
-    same values as the floats; see :data:`_ZERO`)."""
+    same values as the floats; see :data:`ZERO`)."""
     return (np.array(float(v0)), np.array(2.0 * math.sqrt(a * b)), np.array(float(delta)),
             np.array(float(s0)))  # fmt: skip
 

@@ -18,6 +18,7 @@ from typing import Any, ClassVar
 import numpy as np
 from gymnasium.spaces import Box
 
+from flowrun.controllers.car_following_formulas import ONE, ZERO
 from flowrun.envs.rewards import desired_velocities, wave_attenuation_rewards
 from flowrun.types import BoolArray, FloatArray, IntArray
 
@@ -57,15 +58,11 @@ class RingBatch:
         return np.where(lead >= 0, lead, row), np.arange(lead.shape[0])
 
 
-#: 0 and 1 as 0-d arrays: a ufunc takes them as they are (a Python float it converts at
-#: every call, some 1,300 instructions)
-_ZERO, _ONE = np.array(0.0), np.array(1.0)
-
-
 def clip_unit(x: FloatArray) -> FloatArray:
-    """``x`` clipped to [0, 1] in place (two ufuncs: cheaper than ``np.clip`` per step)."""
-    np.maximum(x, _ZERO, out=x)
-    return np.minimum(x, _ONE, out=x)
+    """``x`` clipped to [0, 1] in place (two ufuncs with 0-d array bounds: cheaper than
+    ``np.clip`` per step, and than Python floats, which a ufunc converts at every call)."""
+    np.maximum(x, ZERO, out=x)
+    return np.minimum(x, ONE, out=x)
 
 
 def full_observation(
