@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Instructions per step (valgrind callgrind) of Flow's grid0 and grid1: the env against SUMO
-# alone on the same traffic (load-proof, unlike bench/grid.py's CPU time): SUMO alone replays
+# alone on the same traffic (load-proof, unlike bench/env_vs_sumo.py's CPU time): SUMO alone replays
 # the signal states and car modes the env set (logged by a first env run, not counted).
 # Run from the repository root: bash bench/grid_instructions.sh   (needs valgrind; ~10 min)
 # GRIDS="grid0" STEPS="300 600" bash bench/grid_instructions.sh
