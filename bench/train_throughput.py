@@ -41,7 +41,9 @@ def env_rate(cfg: ExperimentConfig, steps: int) -> float:
     env = make_env(cfg)
     try:
         env.reset(seed=0)
-        action = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+        space = env.action_space
+        assert space.shape is not None and space.dtype is not None  # Box and Discrete have both
+        action = np.zeros(space.shape, dtype=space.dtype)
         start = time.perf_counter()
         for _ in range(steps):
             _, _, terminated, truncated, _ = env.step(action)
