@@ -15,6 +15,8 @@ from flowrun.training.vecenv import make_vec_env
 from tests.conftest import load
 
 NUMPY = "sim.backend=numpy"
+ACCEL = ["env.class=AccelEnv", "env.additional_params.target_velocity=10",
+         "env.additional_params.sort_vehicles=false"]  # fmt: skip
 
 
 def wave(*overrides: str) -> object:
@@ -32,6 +34,9 @@ def wave(*overrides: str) -> object:
         ("ring_wave", ["vehicles[1].car_following.speed_mode=all_checks"], "speed modes"),
         ("ring_wave", ["env.sims_per_step=2"], "one simulation step"),
         ("ring_wave", ["vehicles[1].car_following.car_follow_model=Krauss"], "SUMO's IDM"),
+        ("ring_wave", [*ACCEL, "env.additional_params.sort_vehicles=true"], "sort"),
+        ("ring_wave", [*ACCEL, "env.additional_params.relative_positions=true"],
+         "absolute positions only"),
     ],
 )  # fmt: skip
 def test_a_config_the_backend_cannot_run_is_refused_with_one_config_error(

@@ -217,6 +217,9 @@ def _supported_kind(cfg: ExperimentConfig) -> str:
         raise _refuse("places cars with uniform or random spacing only", "initial", src)
     if kind == "accel" and cfg.env.additional_params.get("sort_vehicles"):
         raise _refuse("does not sort AccelEnv's observation", "env.additional_params", src)
+    if kind == "accel" and cfg.env.additional_params.get("relative_positions"):
+        where = "env.additional_params.relative_positions"
+        raise _refuse("observes AccelEnv's absolute positions only", where, src)
     if not np.isfinite(cfg.env.horizon):
         raise _refuse("needs a finite env.horizon", "env.horizon", src)
     return kind
