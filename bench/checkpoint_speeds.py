@@ -60,7 +60,7 @@ def main() -> None:
                 norm = load_normalize(stats).normalize_obs if tc.normalize else None
                 speeds = []
                 for i in range(args.episodes):
-                    played = play_episode(env, cfg.sim.seed + i, act, norm)
+                    played = play_episode(env, int(cfg.sim.seed or 0) + i, act, norm)
                     assert played is not None
                     speeds.append(played.last_half_speed)
                 table.setdefault(label, []).append(100 * float(np.mean(speeds)) / eq[length])

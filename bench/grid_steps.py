@@ -105,7 +105,7 @@ def record(name: str, steps: int) -> CommandLog:
         now.append((node, state))
         set_state(node, state, link_index)
 
-    tk.set_state = logged  # type: ignore[method-assign]
+    tk.set_state = logged  # type: ignore[method-assign, assignment]
     log = CommandLog([], {}, [])
     for c in env.k.vehicle.table.classes:
         log.modes[c.name] = (c.speed_mode, c.lane_change_mode)

@@ -52,7 +52,7 @@ def main() -> None:
         vk = env.k.vehicle
         routers = env.k.group_routers
         router_step = Timed(routers.step)
-        routers.step = router_step  # type: ignore[method-assign]
+        routers.step = router_step
         sim = env.k.simulation  # the kernel steps SUMO through a frozen table of calls
         sumo_step = Timed(sim._fast.sim_step)
         sim._fast = dataclasses.replace(sim._fast, sim_step=sumo_step)
@@ -60,7 +60,12 @@ def main() -> None:
         vk.reroute_now = rerouted  # type: ignore[method-assign]
         counts: list[int] = []
         original = rerouted.fn
-        rerouted.fn = lambda rows, routes: (counts.append(len(rows)), original(rows, routes))
+
+        def counted(rows: Any, routes: Any) -> Any:
+            counts.append(len(rows))
+            return original(rows, routes)
+
+        rerouted.fn = counted
         steps: list[float] = []
         for _ in range(args.steps):
             t0 = time.perf_counter()
