@@ -221,8 +221,10 @@ def warn(text: str) -> None:
 
 def summary_table(logs: list[Path], chosen: Selection) -> Table:
     """One log's summary, or two side by side with their difference. The return of an
-    evaluation's all-human rollout is ``n/a``: without the policy no RL reward is summed."""
-    human = [lg.metadata.get("evaluation") == "baseline" for lg in chosen.logs]
+    evaluation's all-human rollout is ``n/a``: without the policy no RL reward is summed (a
+    benchmark's own baseline keeps it: its evaluate-mode return is the benchmark's metric)."""
+    human = [lg.metadata.get("evaluation") == "baseline"
+             and lg.metadata.get("baseline_kind") != "benchmark" for lg in chosen.logs]
     if len(chosen.summaries) == 1:
         table = Table(title=chosen.summaries[0].name, show_header=False)
         table.add_column("", style="bold")

@@ -34,6 +34,7 @@ if TYPE_CHECKING:
     from flowrun.config.model import ExperimentConfig
     from flowrun.experiment.metrics import RunMetrics
     from flowrun.rundir.train_state import StopRequest
+    from flowrun.training.evaluate import EvalResult
     from flowrun.training.trainer import TrainResult
 
 RunDirArg = Annotated[
@@ -139,7 +140,7 @@ def train(
     feedback.phase(_finished_phase(result))
     episodes = train_cfg.eval_episodes
     feedback.phase(
-        f"final evaluation: the trained model (best, else final) and the all-human baseline, "
+        f"final evaluation: the trained model (best, else final) and its baseline, "
         f"{episodes} episode(s) each, recorded"
     )
     shown = _evaluate_and_show(result.run_dir, episodes, True, [], None, "best", None, feedback)
@@ -256,7 +257,9 @@ def eval_(
     seed: SeedOpt = None,
     out: EvalOutOpt = None,
 ) -> None:
-    """Roll out a trained policy beside the all-human baseline of the same config.
+    """Roll out a trained policy beside its baseline: for Flow's benchmarks the benchmark's
+    own (as flowrun benchmark runs it: SUMO's actuated lights for the grids, human drivers
+    for the others), else the all-human version of the same config.
 
     Episode i of both resets with seed sim.seed + i (--seed S sets sim.seed). The evaluation
     folder (config, metrics.json, MCAP logs) is RUN_DIR/eval/<timestamp>-<seed>/ or, with
@@ -283,8 +286,7 @@ def _evaluate_and_show(
     out: Path | None,
     feedback: Feedback,
 ) -> Path:
-    """Roll out the policy and the all-human baseline, print their table; the evaluation
-    folder."""
+    """Roll out the policy and its baseline, print their table; the evaluation folder."""
     from flowrun.preflight.prepare import not_a_training_run
     from flowrun.rundir.train_state import run_state
     from flowrun.training.evaluate import eval_config, evaluate, model_path
@@ -330,11 +332,23 @@ def _evaluate_and_show(
             # the signal also stopped a child process (netconvert): still an interruption
             console.print("[yellow]interrupted[/]: evaluation logs finished")
             raise typer.Exit(code=stop.exit_code) from None
-    title = f"{run_dir.name}: {result.model.name}, {episodes} episode(s)"
-    console.print(compare_table(title, _rows(result.policy), _rows(result.baseline)))
-    if not result.baseline:
-        console.print("no all-human baseline: every vehicle group is RL (no human to copy)")
+    _show(result, f"{run_dir.name}: {result.model.name}, {episodes} episode(s)",
+          run_cfg.env.evaluate)  # fmt: skip
     return Path(result.out_dir)
+
+
+def _show(result: EvalResult, title: str, evaluate_mode: bool) -> None:
+    """The policy-vs-baseline table, and which baseline it is."""
+    compared = result.comparison
+    label = "all-human" if compared is None else compared.label
+    console.print(compare_table(title, _rows(result.policy), _rows(result.baseline), label))
+    if compared is None:
+        console.print("no all-human baseline: every vehicle group is RL (no human to copy)")
+    elif compared.benchmark is not None:
+        console.print(f"baseline row: {compared.description}")
+        if not evaluate_mode:
+            console.print("[yellow]note[/]: the baseline runs in evaluate mode, as the "
+                          "benchmark's; --set env.evaluate=true scores the policy the same way")
 
 
 def _note_unfinished(run_dir: Path, state: str) -> None:

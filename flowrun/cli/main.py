@@ -26,7 +26,7 @@ from flowrun.errors import FlowrunError
 COMMANDS: dict[str, tuple[str, str]] = {
     "baseline": ("commands_run", "Run a config's non-RL experiment: a table and MCAP logs."),
     "train": ("commands_train", "Train the config's policy, then evaluate it."),
-    "eval": ("commands_train", "Roll out a trained policy beside the all-human baseline."),
+    "eval": ("commands_train", "Roll out a trained policy beside its baseline."),
     "replay": ("commands_replay", "Summarise, compare, plot, export or repair MCAP logs."),
     "sweep": ("commands_sweep", "Run a baseline for every combination of --grid values."),
     "benchmark": ("commands_benchmark", "Run Flow's benchmarks' non-RL baselines."),

@@ -83,18 +83,23 @@ def signals_table(title: str, rows: list[Any]) -> Table:
 
 
 def compare_table(
-    title: str, policy: Sequence[Mapping[str, Any]], baseline: Sequence[Mapping[str, Any]]
+    title: str,
+    policy: Sequence[Mapping[str, Any]],
+    baseline: Sequence[Mapping[str, Any]],
+    baseline_label: str = "all-human",
 ) -> Table:
-    """Policy vs all-human baseline: one row per episode each (dicts of RunMetrics fields,
-    a ``mean`` row where there are several). The all-human return is ``n/a``: without the
-    policy there is no RL reward to add up."""
+    """Policy vs its baseline: one row per episode each (dicts of RunMetrics fields, a
+    ``mean`` row where there are several). The all-human return is ``n/a``: without the
+    policy there is no RL reward to add up; a benchmark's own baseline (``baseline_label``
+    ``baseline``) shows its evaluate-mode return, the benchmark's metric (-delay for the
+    grids)."""
     table = new_table(
         title,
         ("rollout", "episode", "mean", "2nd half", "std", "2nd half std", "min", "return",
          "crashes"),
         "speeds in m/s; std: across cars, averaged over steps",
     )
-    for label, rows in (("policy", policy), ("all-human", baseline)):
+    for label, rows in (("policy", policy), (baseline_label, baseline)):
         for m in rows:
             table.add_row(label, str(m["run"]), *_speed_cells(m), _return(label, m),
                           f"{m['collisions']:g}")  # fmt: skip

@@ -105,6 +105,20 @@ class Benchmark:
         """``<folder>/<name>.yaml``."""
         return folder / f"{self.name}.yaml"
 
+    @property
+    def baseline_note(self) -> str:
+        """What the baseline is, in a few words (``SUMO's actuated lights``)."""
+        return BASELINE_NOTES[self.family]
+
+
+#: What each family's baseline is, for tables and ``flowrun eval``.
+BASELINE_NOTES = {
+    "figureeight": "14 human drivers of the paper's vehicle type, no AV",
+    "merge": "no AV, the whole inflow human",
+    "grid": "SUMO's actuated lights",
+    "bottleneck": "no AV, the whole inflow human",
+}
+
 
 _GRID_NOTE = (
     "Flow's flow/benchmarks/create_movies.sh checks grid0/grid1 against 296, a number it reads "

@@ -1,8 +1,11 @@
-"""``evaluate``: roll a trained policy out with :class:`Experiment` beside the all-human baseline.
+"""``evaluate``: roll a trained policy out with :class:`Experiment` beside its baseline.
 
-Both use the same config and the same seeds; in the baseline, every RL vehicle group drives with
-the acceleration controller (same parameters, same noise) of the first human group. Each episode
-is recorded to MCAP under ``<run>/eval/<timestamp>/``.
+Both use the same seeds. The baseline
+(:func:`~flowrun.training.comparison.comparison_baseline`) is, for one of Flow's benchmarks,
+the benchmark's own (its ``--set`` overrides applied to the config, as ``flowrun benchmark``
+runs it: e.g. SUMO's actuated lights for the grids); for any other config the same config with
+every RL vehicle group driving with the acceleration controller (same parameters, same noise)
+of the first human group. Each episode is recorded to MCAP under ``<run>/eval/<timestamp>/``.
 """
 
 from __future__ import annotations
@@ -37,8 +40,8 @@ from flowrun.rundir.folders import (
     write_json,
 )
 from flowrun.training.algorithms import algorithm_class
+from flowrun.training.comparison import Comparison, comparison_baseline
 from flowrun.training.periodic_eval import all_human as all_human
-from flowrun.training.periodic_eval import all_human_or_none
 from flowrun.training.trainer import (
     BEST_MODEL,
     BEST_VECNORMALIZE,
@@ -56,7 +59,7 @@ MODELS = ("best", "final")
 
 @dataclass
 class EvalResult:
-    """Metrics of the policy and of the all-human baseline, episode by episode.
+    """Metrics of the policy and of its baseline, episode by episode.
 
     Attributes:
         out_dir: the evaluation folder (``<run>/eval/<timestamp>``).
@@ -66,6 +69,7 @@ class EvalResult:
         logs: MCAP files written.
         run_status: the training run's state (:func:`flowrun.rundir.train_state.run_state`):
             anything but ``complete`` means the policy comes from an unfinished run.
+        comparison: which baseline (``None``: there is none, ``baseline`` is empty).
     """
 
     out_dir: Path
@@ -74,9 +78,12 @@ class EvalResult:
     baseline: list[RunMetrics]
     logs: list[Path]
     run_status: str = "complete"
+    comparison: Comparison | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain data for ``metrics.json``."""
+        """Plain data for ``metrics.json`` (``baseline_kind``: ``benchmark`` for a benchmark's
+        own baseline, ``all-human``, or ``null`` for none; ``baseline_description``)."""
+        known = self.comparison
         return {
             "model": str(self.model),
             "policy": [m.to_dict() for m in self.policy],
@@ -85,6 +92,8 @@ class EvalResult:
             "baseline_mean": mean_metrics(self.baseline),
             "logs": [p.name for p in self.logs],
             "run_status": self.run_status,
+            "baseline_kind": None if known is None else known.kind,
+            "baseline_description": None if known is None else known.description,
         }
 
 
@@ -153,7 +162,7 @@ def evaluate(
     out: Path | None = None,
     should_stop: StopAsked | None = None,
 ) -> EvalResult:
-    """Roll out the trained policy and the all-human baseline, ``episodes`` each.
+    """Roll out the trained policy and its baseline, ``episodes`` each.
 
     Episode ``i`` of both resets with seed ``sim.seed + i``. Writes ``metrics.json`` (with
     ``status``: ``running``, then ``complete`` or ``interrupted``) and the MCAP logs
@@ -206,7 +215,7 @@ def run_evaluation(
     out: Path | None,
     should_stop: StopAsked | None = None,
 ) -> EvalResult:
-    """The evaluation folder of any backend: the policy's and the all-human rollouts of
+    """The evaluation folder of any backend: the policy's and its baseline's rollouts of
     ``episodes`` episodes each (episode ``i`` seeded ``sim.seed + i``), their MCAP logs,
     ``metrics.json`` (``head`` plus seed, run, model and ``run_status``; ``running`` ->
     ``complete`` / ``interrupted``) and ``status.json``.
@@ -220,6 +229,7 @@ def run_evaluation(
             (the signal also killed netconvert or SUMO) labels the folder ``interrupted``
             with exit code 128 + the signal, not ``failed``.
     """
+    compared = comparison_baseline(cfg)  # an error here: before any folder is made
     seed = int(cfg.sim.seed or 0)
     out_dir = _eval_dir(run_dir / "eval" if out is None else out, seed)
     (out_dir / "config.yaml").write_text(dump_config(cfg))
@@ -230,9 +240,9 @@ def run_evaluation(
     logs: list[Path] = []
     try:
         rl = _rollout(cfg, "policy", episodes, seed, act, out_dir, logs, progress)
-        humans = all_human_or_none(cfg)
-        human = [] if humans is None else _rollout(
-            humans, "baseline", episodes, seed, None, out_dir, logs, progress
+        human = [] if compared is None else _rollout(
+            compared.config, "baseline", episodes, seed, None, out_dir, logs, progress,
+            {"baseline_kind": compared.kind},
         )
     except KeyboardInterrupt as err:
         write_json(out_dir / "metrics.json", _stopped(head, logs))
@@ -246,7 +256,7 @@ def run_evaluation(
         else:
             mark_done(out_dir, "failed", error=f"{type(err).__name__}: {err}", exit_code=1)
         raise
-    result = EvalResult(out_dir, model, rl, human, logs, run_status)
+    result = EvalResult(out_dir, model, rl, human, logs, run_status, compared)
     write_json(out_dir / "metrics.json",
                {"status": "complete", "partial": False, **head, **result.to_dict()})
     mark_done(out_dir, "complete", exit_code=0)
@@ -283,13 +293,17 @@ def _rollout(
     out_dir: Path,
     logs: list[Path],
     progress: EvalProgress | None,
+    meta: dict[str, str] | None = None,
 ) -> list[RunMetrics]:
+    """``episodes`` episodes of ``cfg`` logged to ``<label>_<i>.mcap`` (metadata
+    ``evaluation: <label>`` and ``meta``)."""
     env = make_env(cfg)  # a multi-agent env is stepped as one joint agent by Experiment
 
     def sink(run: int) -> FrameSink:
         path = out_dir / f"{label}_{run}.mcap"
         logs.append(path)
-        return open_run_log(path, env, cfg, seed + run, run, extra={"evaluation": label})
+        extra = {"evaluation": label, **(meta or {})}
+        return open_run_log(path, env, cfg, seed + run, run, extra=extra)
 
     def on_step(run: int, step: int) -> None:
         if progress is not None:

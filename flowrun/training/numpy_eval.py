@@ -23,7 +23,8 @@ from flowrun.errors import ConfigError
 from flowrun.fastring.plan import NumpyBackendRefusal, RingPlan, ring_plan
 from flowrun.fastring.rings import FastRings
 from flowrun.fastring.tasks import RingTask
-from flowrun.training.periodic_eval import Act, Episodes, EpisodeScore, all_human_or_none
+from flowrun.training.comparison import comparison_baseline
+from flowrun.training.periodic_eval import Act, Episodes, EpisodeScore
 
 EVAL_BACKEND_PATH = "train.eval_backend"
 
@@ -73,14 +74,15 @@ class NumpyEpisodeRunner(Episodes):
         self.baseline = self._baseline(cfg) if self.needs_baseline else [math.nan] * n
 
     def _baseline(self, cfg: ExperimentConfig) -> list[float]:
-        """Last-half mean speed of each seed's all-human episode (``nan`` when unknown)."""
+        """Last-half mean speed of each seed's baseline episode (``nan`` when unknown):
+        :func:`~flowrun.training.comparison.comparison_baseline`, all-human on a ring."""
         nan = [math.nan] * len(self.seeds)
-        humans = all_human_or_none(cfg)
-        if humans is None:  # no human group to copy: scores fall back to returns
+        baseline = comparison_baseline(cfg)
+        if baseline is None:  # no human group to copy: scores fall back to returns
             return nan
         # not refused, as the policy's plan was not: only the RL groups change, to the human
         # controller that plan already runs. runs None: asked to stop (run() gives up too)
-        runs = self._play(numpy_eval_plan(humans), None, None)
+        runs = self._play(numpy_eval_plan(baseline.config), None, None)
         return nan if runs is None else [r.last_half_speed for r in runs]
 
     def run(

@@ -5,9 +5,11 @@ this process (the training envs run in subprocesses, so this process has no othe
 a numpy copy of the policy network (a few microseconds a step instead of SB3's ~100-250 µs
 ``predict``). Scores are the episode returns in evaluation mode (Flow's ``env.evaluate``:
 the mean speed for the ring envs); the best model is the one whose worst episode's last-half
-mean speed is highest relative to the all-human baseline of the same episodes
-(:meth:`EpisodeRunner.score`). Envs that vary their network per episode spread the evaluation
-episodes over that variation (``evaluation_options``: the ring lengths of the training range).
+mean speed is highest relative to the baseline of the same episodes
+(:meth:`EpisodeRunner.score`; all-human, or a benchmark's own baseline:
+:mod:`flowrun.training.comparison`). Envs that vary their network per episode spread the
+evaluation episodes over that variation (``evaluation_options``: the ring lengths of the
+training range).
 
 The history lives in ``eval_log/evaluations.npz`` (SB3's ``EvalCallback`` format: ``timesteps``,
 ``results``, ``ep_lengths``, plus ``last_half_speed``); a resumed run continues it and keeps
@@ -21,15 +23,17 @@ import math
 import time
 import zipfile
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from flowrun.config.model import ExperimentConfig
-from flowrun.config.params import VehicleParams, is_rl
-from flowrun.errors import ConfigError, TrainingError
+from flowrun.errors import TrainingError
+from flowrun.training.comparison import all_human as all_human
+from flowrun.training.comparison import all_human_or_none as all_human_or_none
+from flowrun.training.comparison import comparison_baseline
 from flowrun.training.deps import require
 from flowrun.training.policy_functions import Act as Act
 from flowrun.training.policy_functions import numpy_policy as numpy_policy
@@ -46,28 +50,6 @@ log = logging.getLogger(__name__)
 
 EVAL_LOG = "eval_log"
 EVALUATIONS = "evaluations.npz"
-
-
-def all_human(cfg: ExperimentConfig) -> ExperimentConfig:
-    """The config with each RL group driven like the first human group."""
-    humans = [g for g in cfg.vehicles.groups if not is_rl(g)]
-    if not humans:
-        raise ConfigError("no human vehicle group to copy for the all-human baseline", "vehicles")
-    human = humans[0].acceleration_controller
-    groups = [
-        replace(g, acceleration_controller=human) if is_rl(g) else g for g in cfg.vehicles.groups
-    ]
-    return replace(cfg, vehicles=VehicleParams(groups))
-
-
-def all_human_or_none(cfg: ExperimentConfig) -> ExperimentConfig | None:
-    """:func:`all_human` of ``cfg``; ``None`` when every group is RL (e.g. Flow's
-    figureeight2: no human to copy; the benchmark's own baseline says which humans to use),
-    where the evaluations score by returns and leave the baseline out."""
-    try:
-        return all_human(cfg)
-    except ConfigError:
-        return None
 
 
 @dataclass(frozen=True)
@@ -88,7 +70,8 @@ class EpisodeScore:
 
 class Episodes:
     """The evaluation episodes of a run, reset with the same seeds at every evaluation and
-    ranked against the all-human baseline of the same episodes: :class:`EpisodeRunner`
+    ranked against the baseline of the same episodes (all-human, or a benchmark's own:
+    :func:`~flowrun.training.comparison.comparison_baseline`): :class:`EpisodeRunner`
     (SUMO) or :class:`~flowrun.training.numpy_eval.NumpyEpisodeRunner`.
 
     Args:
@@ -96,7 +79,7 @@ class Episodes:
         should_stop: polled every step; once true, :meth:`run` gives up.
 
     Attributes:
-        baseline: each seed's all-human last-half mean speed, m/s (``nan`` when unknown);
+        baseline: each seed's baseline last-half mean speed, m/s (``nan`` when unknown);
             set by the subclass.
     """
 
@@ -114,13 +97,13 @@ class Episodes:
 
     @property
     def needs_baseline(self) -> bool:
-        """Whether :meth:`score` compares with the all-human episodes (``speed_ratio``)."""
+        """Whether :meth:`score` compares with the baseline's episodes (``speed_ratio``)."""
         return self.best_by == "speed_ratio"
 
     def score(self, scores: Sequence[EpisodeScore]) -> float:
         """What picks the best model. ``best_by: return``: the mean evaluation-mode return (a
         benchmark's metric). ``speed_ratio``: the worst episode's last-half mean speed as a
-        fraction of the all-human baseline's on the same seed (rings of different lengths then
+        fraction of the baseline's on the same seed (rings of different lengths then
         count alike, and a policy must be good on every one of them: the mean let a policy that
         stops the AV on short rings win on its long ones); the mean return when the env
         reports no speeds."""
@@ -163,13 +146,15 @@ class EpisodeRunner(Episodes):
         self.options = _spread_options(self.env, len(self.seeds))
 
     def _baseline(self, cfg: ExperimentConfig) -> list[float]:
-        """Last-half mean speed of each seed's episode with the AVs driven like the humans."""
+        """Last-half mean speed of each seed's episode of the baseline
+        (:func:`~flowrun.training.comparison.comparison_baseline`: the benchmark's own, else
+        the AVs driven like the humans)."""
         from flowrun.envs.factory import make_env
 
-        human = all_human_or_none(cfg)
-        if human is None:  # no human group to copy: scores fall back to returns
+        baseline = comparison_baseline(cfg)
+        if baseline is None:  # no human group to copy: scores fall back to returns
             return [math.nan] * len(self.seeds)
-        env = make_env(human)
+        env = make_env(baseline.config)
         try:
             spread = _spread_options(env, len(self.seeds))  # as the policy's episodes
             runs = [

@@ -1,4 +1,4 @@
-"""``evaluate_rllib``: roll an RLlib checkpoint out beside the all-human baseline, to MCAP.
+"""``evaluate_rllib``: roll an RLlib checkpoint out beside its baseline, to MCAP.
 
 The policies are read from the checkpoint's RL modules (no Ray instance is started): the
 module's inference output, its action distribution's mode (``deterministic``) or a sample,
@@ -113,7 +113,7 @@ def evaluate_rllib(
     out: Path | None = None,
     should_stop: StopAsked | None = None,
 ) -> EvalResult:
-    """Roll out the RLlib policy and the all-human baseline, ``episodes`` each (as
+    """Roll out the RLlib policy and its baseline, ``episodes`` each (as
     :func:`flowrun.training.evaluate`).
 
     Episode ``i`` of both resets with seed ``sim.seed + i``. Writes ``metrics.json`` (``status``
