@@ -14,7 +14,7 @@ metrics) to ``policies/<benchmark>/``, which ``flowrun eval`` takes like a run f
 also writes it between the ``<!-- benchmark-results:start/end -->`` markers of FILE.
 
 Run: ``PYTHONPATH=. .venv/bin/python bench/benchmark_results.py add runs/.../<run>/`` (about
-2 min per run: 5 policy and 5 all-human episodes twice) then ``... table --readme README.md``.
+2 min per run: 5 policy and 5 baseline episodes twice) then ``... table --readme README.md``.
 """
 
 from __future__ import annotations
