@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -21,23 +23,42 @@ from flowrun.loading.loader import load_config
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "ring_wave.yaml"
 
 
+def random_rollout(env: Any, seed: int, steps: int) -> Iterator[tuple[Any, float | None, bool]]:
+    """Reset ``env`` with ``seed``, then take at most ``steps`` actions drawn uniformly in
+    [-1, 1] by a generator seeded with ``seed``, up to the episode's end.
+
+    Yields ``(observation, reward, last)`` after the reset (reward ``None``) and after every
+    step; ``last`` is true where no step follows. The env is not closed.
+    """
+    obs, _ = env.reset(seed=seed)
+    rng = np.random.default_rng(seed)
+    yield obs, None, steps == 0
+    for taken in range(1, steps + 1):
+        action = rng.uniform(-1, 1, env.action_space.shape).astype(np.float32)
+        obs, reward, terminated, truncated, _ = env.step(action)
+        yield obs, reward, bool(terminated or truncated or taken == steps)
+        if terminated or truncated:
+            return
+
+
+def obs_bytes(obs: Any) -> Iterator[bytes]:
+    """An observation's float64 bytes, part by part where it is a tuple."""
+    for part in obs if isinstance(obs, tuple) else (obs,):
+        yield np.asarray(part, np.float64).tobytes()
+
+
 def fingerprint(config: Path, seeds: list[int], steps: int) -> tuple[str, int]:
     """The sha256 (hex) of every observation and reward, and the steps taken in all."""
     env = make_env(load_config(config))
     digest, taken = hashlib.sha256(), 0
     try:
         for seed in seeds:
-            obs, _ = env.reset(seed=seed)
-            digest.update(np.asarray(obs, np.float64).tobytes())
-            rng = np.random.default_rng(seed)
-            for _ in range(steps):
-                action = rng.uniform(-1, 1, env.action_space.shape).astype(np.float32)
-                obs, reward, terminated, truncated, _ = env.step(action)
-                digest.update(np.asarray(obs, np.float64).tobytes())
-                digest.update(np.float64(reward).tobytes())
-                taken += 1
-                if terminated or truncated:
-                    break
+            for obs, reward, _ in random_rollout(env, seed, steps):
+                for chunk in obs_bytes(obs):
+                    digest.update(chunk)
+                if reward is not None:
+                    digest.update(np.float64(reward).tobytes())
+                    taken += 1
     finally:
         env.close()
     return digest.hexdigest(), taken

@@ -13,12 +13,16 @@ from __future__ import annotations
 
 import argparse
 import hashlib
-from collections.abc import Iterator
+import sys
+from pathlib import Path
 
 import numpy as np
 
 from flowrun.envs.defaults import grid_config
 from flowrun.envs.factory import make_env
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from env_fingerprint import obs_bytes, random_rollout  # bench/, beside this file
 
 #: (label, rows, cols, env class, evaluate)
 CASES: tuple[tuple[str, int, int, str, bool], ...] = (
@@ -30,25 +34,24 @@ CASES: tuple[tuple[str, int, int, str, bool], ...] = (
 )
 
 
-def _obs_bytes(obs: object) -> Iterator[bytes]:
-    parts = obs if isinstance(obs, tuple) else (obs,)
-    for part in parts:
-        yield np.asarray(part, np.float64).tobytes()
-
-
 def fingerprint(rows: int, cols: int, env_class: str, evaluate: bool, steps: int,
                 seed: int) -> tuple[str, int]:  # fmt: skip
-    """The sha256 (hex) of observations, rewards and simulation state, and the steps taken."""
+    """The sha256 (hex) of observations, rewards and simulation state, and the steps taken.
+
+    Before every step: the observation, then the simulation state; after it: the reward.
+    """
     config = grid_config(rows, cols, env_class)
     config.env.evaluate = evaluate
     env = make_env(config)
     digest, taken = hashlib.sha256(), 0
     try:
-        obs, _ = env.reset(seed=seed)
-        space = env.action_space
-        rng = np.random.default_rng(seed)
-        for _ in range(steps):
-            for chunk in _obs_bytes(obs):
+        for obs, reward, last in random_rollout(env, seed, steps):
+            if reward is not None:
+                digest.update(np.float64(reward).tobytes())
+                taken += 1
+            if last:
+                break
+            for chunk in obs_bytes(obs):
                 digest.update(chunk)
             vk, tk = env.k.vehicle, env.k.traffic_light
             digest.update("|".join(vk.get_ids()).encode())
@@ -56,12 +59,6 @@ def fingerprint(rows: int, cols: int, env_class: str, evaluate: bool, steps: int
             digest.update(np.asarray(vk.speed, np.float64).tobytes())
             digest.update(np.asarray(vk.lane_pos, np.float64).tobytes())
             digest.update("|".join(tk.get_state(t) for t in tk.get_ids()).encode())
-            action = rng.uniform(-1, 1, space.shape).astype(np.float32)
-            obs, reward, terminated, truncated, _ = env.step(action)
-            digest.update(np.float64(reward).tobytes())
-            taken += 1
-            if terminated or truncated:
-                break
     finally:
         env.close()
     return digest.hexdigest(), taken
