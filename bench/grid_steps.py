@@ -5,9 +5,9 @@ long as the run, recording off. ``raw``: SUMO alone doing the same experiment: t
 files and start (after the env's reset), the signal states the env set at each step (from a
 ``record`` run) and the speed and lane-change modes the kernel gives every car that enters,
 then ``simulationStep``; nothing is read. The traffic is then the env's, car for car
-(:func:`replay` can check it); SUMO alone running its own programs instead holds other
-traffic (grid0: 69 cars on average against the env's 62), which made the old baseline
-unfair to one side or the other.
+(:func:`replay` can check it). SUMO alone running its own light programs would hold other
+traffic (grid0: 69 cars on average against the env's 62), so it would not be a fair floor
+for the env.
 
 Usage (``bench/grid_instructions.sh`` counts ``env`` and ``raw`` under callgrind)::
 
