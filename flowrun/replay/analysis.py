@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -42,6 +43,19 @@ class SpeedSeries:
     rl_ids: frozenset[str] = frozenset()
 
 
+def _with_rosters(messages: Iterable[Any], every: int = 1) -> Iterator[tuple[Any, bool]]:
+    """Every ``every``-th vehicle message, each with whether its roster (ids, types, RL flags)
+    may differ from the previous one's: the writer bumps ``roster_version`` when it changes,
+    and version 0 means each message has its own."""
+    last_roster = -1
+    for k, msg in enumerate(messages):
+        if k % every:
+            continue
+        roster = msg.roster_version
+        yield msg, roster == 0 or roster != last_roster
+        last_roster = roster
+
+
 def _keep_indices(ids: list[str], wanted: set[str] | None) -> list[int] | None:
     if wanted is None:
         return None
@@ -69,11 +83,8 @@ def speed_series(
     last_ids: list[str] | None = None
     keep: list[int] | None = None
     nan = math.nan
-    last_roster = -1
-    for msg in log.vehicle_messages(start_s, end_s):
-        roster = msg.roster_version
-        if roster == 0 or roster != last_roster:  # ids/types/is_rl may have changed
-            last_roster = roster
+    for msg, new_roster in _with_rosters(log.vehicle_messages(start_s, end_s)):
+        if new_roster:
             ids = list(msg.ids)
             vtypes = list(msg.types)
             is_rl = list(msg.is_rl)
@@ -118,6 +129,10 @@ class TimeSpace:
     is_rl: np.ndarray
 
 
+#: One logged step's points: times, positions, speeds, ids, RL flags.
+_StepPoints = tuple[FloatArray, FloatArray, FloatArray, StrArray, np.ndarray]
+
+
 def time_space_points(
     log: McapLog,
     *,
@@ -142,17 +157,12 @@ def time_space_points(
     if route is not None:
         return _route_points(log, route, start_s, end_s, vehicles, every)
     wanted = None if vehicles is None else set(vehicles)
-    t_parts, p_parts, v_parts, id_parts, rl_parts = [], [], [], [], []
+    steps: list[_StepPoints] = []
     last_ids: list[str] | None = None
     keep: list[int] | None = None
     id_arr = np.array([], dtype=str)
-    last_roster = -1
-    for k, msg in enumerate(log.vehicle_messages(start_s, end_s)):
-        if k % every:
-            continue
-        roster = msg.roster_version
-        if roster == 0 or roster != last_roster:
-            last_roster = roster
+    for msg, new_roster in _with_rosters(log.vehicle_messages(start_s, end_s), every):
+        if new_roster:
             ids = list(msg.ids)
             if ids != last_ids:
                 keep = _keep_indices(ids, wanted)
@@ -163,18 +173,8 @@ def time_space_points(
         rl = np.array(msg.is_rl, dtype=np.bool_)
         if keep is not None:
             pos, speed, rl = pos[keep], speed[keep], rl[keep]
-        t_parts.append(np.full(pos.size, msg.time))
-        p_parts.append(pos)
-        v_parts.append(speed)
-        id_parts.append(id_arr)
-        rl_parts.append(rl)
-    return TimeSpace(
-        times=_cat(t_parts, np.float64),
-        positions=_cat(p_parts, np.float64),
-        speeds=_cat(v_parts, np.float64),
-        ids=_cat(id_parts, str),
-        is_rl=_cat(rl_parts, np.bool_),
-    )
+        steps.append((np.full(pos.size, msg.time), pos, speed, id_arr, rl))
+    return _joined(steps)
 
 
 def _route_points(
@@ -187,36 +187,31 @@ def _route_points(
 ) -> TimeSpace:
     """:func:`time_space_points` along a route: the car set differs from step to step."""
     wanted = None if vehicles is None else set(vehicles)
-    t_parts, p_parts, v_parts, id_parts, rl_parts = [], [], [], [], []
+    steps: list[_StepPoints] = []
     ids: list[str] = []
-    last_roster = -1
-    for k, msg in enumerate(log.vehicle_messages(start_s, end_s)):
-        if k % every:
-            continue
-        roster = msg.roster_version
-        if roster == 0 or roster != last_roster:
-            last_roster = roster
+    for msg, new_roster in _with_rosters(log.vehicle_messages(start_s, end_s), every):
+        if new_roster:
             ids = list(msg.ids)
         on, pos = route.locate(list(msg.edges), np.array(msg.lane_pos, dtype=np.float64))
         if wanted is not None:
             keep = np.array([ids[i] in wanted for i in on.tolist()], dtype=np.bool_)
             on, pos = on[keep], pos[keep]
-        t_parts.append(np.full(pos.size, msg.time))
-        p_parts.append(pos)
-        v_parts.append(np.array(msg.speed, dtype=np.float64)[on])
-        id_parts.append(np.array([ids[i] for i in on.tolist()], dtype=str))
-        rl_parts.append(np.array(msg.is_rl, dtype=np.bool_)[on])
-    return TimeSpace(
-        times=_cat(t_parts, np.float64),
-        positions=_cat(p_parts, np.float64),
-        speeds=_cat(v_parts, np.float64),
-        ids=_cat(id_parts, str),
-        is_rl=_cat(rl_parts, np.bool_),
-    )
+        speed = np.array(msg.speed, dtype=np.float64)[on]
+        id_arr = np.array([ids[i] for i in on.tolist()], dtype=str)
+        rl = np.array(msg.is_rl, dtype=np.bool_)[on]
+        steps.append((np.full(pos.size, msg.time), pos, speed, id_arr, rl))
+    return _joined(steps)
 
 
-def _cat(parts: list[np.ndarray], dtype: type) -> np.ndarray:
-    return np.concatenate(parts) if parts else np.array([], dtype=dtype)
+def _joined(steps: list[_StepPoints]) -> TimeSpace:
+    """The steps' points, concatenated column by column."""
+    dtypes: tuple[type, ...] = (np.float64, np.float64, np.float64, str, np.bool_)
+    columns = [
+        np.concatenate([step[c] for step in steps]) if steps else np.array([], dtype=dtype)
+        for c, dtype in enumerate(dtypes)
+    ]
+    times, positions, speeds, ids, is_rl = columns
+    return TimeSpace(times=times, positions=positions, speeds=speeds, ids=ids, is_rl=is_rl)
 
 
 def time_space_data(
