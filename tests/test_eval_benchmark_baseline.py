@@ -64,6 +64,14 @@ def _attached_config(log: Any, tmp_path: Path) -> ExperimentConfig:
     return load_config(path)
 
 
+def _replayed_return(log: Path) -> str:
+    """The return ``flowrun replay LOG`` prints."""
+    result = runner.invoke(app, ["replay", str(log)])
+    assert result.exit_code == 0, result.output
+    line = next(line for line in result.output.splitlines() if " return " in line)
+    return line.strip("│ ").split()[-1]
+
+
 def _table_row(output: str, label: str) -> list[str]:
     return next(line.split() for line in output.splitlines() if line.split()[:1] == [label])
 
@@ -106,6 +114,7 @@ def test_grid0_is_compared_with_actuated_lights_and_shows_their_minus_delay(
     assert _table_row(output, "baseline")[7] == f"{row['episode_return']:.1f}"  # not n/a
     attached = _attached_config(open_log(folder / "baseline_0.mcap"), tmp_path)
     assert attached.traffic_lights.controller == "actuated"
+    assert _replayed_return(folder / "baseline_0.mcap") == f"{row['episode_return']:.3f}"
 
 
 def test_a_config_that_is_no_benchmark_keeps_the_all_human_rollout(tmp_path: Path) -> None:
@@ -122,6 +131,7 @@ def test_a_config_that_is_no_benchmark_keeps_the_all_human_rollout(tmp_path: Pat
     assert {t for f in log.frames() for t in f.types} == {"human", "rl"}  # the groups' names
     assert not any(np.any(f.is_rl) for f in log.frames())
     assert log.metadata["baseline_kind"] == "all-human"
+    assert _replayed_return(result.out_dir / "baseline_0.mcap") == "n/a"
 
 
 def test_evaluations_during_training_rank_figureeight2_against_its_benchmarks_baseline() -> None:
