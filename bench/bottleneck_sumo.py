@@ -20,55 +20,23 @@ import argparse
 import statistics
 import sys
 import tempfile
+from dataclasses import replace
 from pathlib import Path
-from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from paper_sumo import Setup, run, write_setup  # bench/, beside this file
 
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "bottleneck.yaml"
 
 
-def write_files(inflow: float, out: Path, overrides: tuple[str, ...]) -> tuple[Path, Path, Any]:
+def write_files(inflow: float, out: Path, overrides: tuple[str, ...], seconds: float) -> Setup:
     """The ``.net.xml`` and ``.rou.xml`` flowrun builds for ``configs/bottleneck.yaml`` at
-    ``inflow`` veh/h, and the config's vehicle groups (their speed and lane-change modes)."""
-    from flowrun.envs.factory import make_env
+    ``inflow`` veh/h, to be run for ``seconds`` (one simulation step per env step)."""
     from flowrun.loading.loader import load_config
-    from flowrun.networks.build import build_network
-    from flowrun.networks.routes import routes_xml
 
     cfg = load_config(CONFIG, [f"network.inflows.0.vehs_per_hour={inflow}", *overrides])
-    env = make_env(cfg)
-    try:
-        network = env.network
-        net = build_network(network.spec, out, "bottleneck")
-        rou = out / f"bottleneck-{inflow:.0f}.rou.xml"
-        rou.write_text(routes_xml(network.spec, network.vehicles, network.net_params.inflows))
-        return net, rou, network.vehicles.groups
-    finally:
-        env.close()
-
-
-def run(traci: Any, sumo: str, net: Path, rou: Path, groups: Any, seed: int,
-        seconds: float, window: float) -> tuple[float, int]:  # fmt: skip
-    """Outflow (veh/h) over the last ``window`` s and the teleports of one run."""
-    modes = {g.veh_id: (int(g.car_following_params.speed_mode),
-                        int(g.lane_change_params.lane_change_mode)) for g in groups}  # fmt: skip
-    traci.start([sumo, "-n", str(net), "-r", str(rou), "--step-length", "0.5",
-                 "--no-step-log", "true", "--no-warnings", "true", "--time-to-teleport", "-1",
-                 "--collision.check-junctions", "true", "--seed", str(seed)])  # fmt: skip
-    steps, counted = round(seconds / 0.5), round(window / 0.5)
-    arrived = teleports = 0
-    try:
-        for step in range(steps):
-            traci.simulationStep()
-            for vid in traci.simulation.getDepartedIDList():
-                speed_mode, lc_mode = modes[traci.vehicle.getTypeID(vid)]
-                traci.vehicle.setSpeedMode(vid, speed_mode)
-                traci.vehicle.setLaneChangeMode(vid, lc_mode)
-            teleports += traci.simulation.getStartingTeleportNumber()
-            if step >= steps - counted:
-                arrived += traci.simulation.getArrivedNumber()
-    finally:
-        traci.close()
-    return arrived * 3600.0 / window, teleports
+    setup = write_setup(cfg, out, f"bottleneck-{inflow:.0f}", speed=False)
+    return replace(setup, sims_per_step=1, env_steps=round(seconds / setup.step))
 
 
 def main() -> None:
@@ -96,9 +64,8 @@ def main() -> None:
     print("|---:|---:|---:|---:|")
     with tempfile.TemporaryDirectory() as tmp:
         for inflow in (float(v) for v in args.inflows.split(",")):
-            net, rou, groups = write_files(inflow, Path(tmp), tuple(args.set))
-            runs = [run(traci, sumo, net, rou, groups, s, args.seconds, args.window)
-                    for s in range(args.seeds)]  # fmt: skip
+            setup = write_files(inflow, Path(tmp), tuple(args.set), args.seconds)
+            runs = [run(traci, sumo, setup, s, args.window) for s in range(args.seeds)]
             out = [o for o, _ in runs]
             std = statistics.stdev(out) if len(out) > 1 else 0.0
             print(f"| {inflow:.0f} | {statistics.mean(out):.0f} | {std:.0f} | "

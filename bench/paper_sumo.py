@@ -52,15 +52,36 @@ class Setup:
     speed: bool
 
 
+def write_setup(cfg: Any, out: Path, stem: str, speed: bool) -> Setup:
+    """flowrun's files of config ``cfg`` under ``out`` (the routes as ``stem.rou.xml``) and
+    what a run of them needs; ``speed``: measure the mean speed, else the outflow."""
+    import flowrun.networks.build as build
+    from flowrun.envs.factory import make_env
+    from flowrun.networks.routes import routes_xml
+
+    env = make_env(cfg)
+    try:
+        network = env.network
+        net = build.build_network(network.spec, out, cfg.name)
+        rou = out / f"{stem}.rou.xml"
+        rou.write_text(routes_xml(network.spec, network.vehicles, network.net_params.inflows))
+        modes = {g.veh_id: (int(g.car_following_params.speed_mode),
+                            int(g.lane_change_params.lane_change_mode))
+                 for g in network.vehicles.groups}  # fmt: skip
+    finally:
+        env.close()
+    e = cfg.env
+    return Setup(net, rou, modes, cfg.sim.sim_step, e.sims_per_step,
+                 int(e.warmup_steps + e.horizon), speed)  # fmt: skip
+
+
 def write_files(name: str, setup: str, out: Path, sets: tuple[str, ...],
                 netconvert: str | None = None) -> Setup:  # fmt: skip
     """flowrun's files of benchmark ``name``'s baseline (``setup``: flowrun or paper), the
     network by ``netconvert`` (default: the wheel's)."""
     import flowrun.networks.build as build
-    from flowrun.envs.factory import make_env
     from flowrun.experiment.benchmark import BENCHMARKS
     from flowrun.loading.loader import load_config
-    from flowrun.networks.routes import routes_xml
 
     if netconvert:
         wheel = build.sumo_binary
@@ -71,29 +92,18 @@ def write_files(name: str, setup: str, out: Path, sets: tuple[str, ...],
         build.sumo_binary = tool_path
     overrides = [*BENCHMARKS[name].baseline, *(PAPER[name] if setup == "paper" else ()), *sets]
     cfg = load_config(CONFIGS / f"{name}.yaml", overrides)
-    env = make_env(cfg)
-    try:
-        network = env.network
-        net = build.build_network(network.spec, out, name)
-        rou = out / f"{name}-{setup}.rou.xml"
-        rou.write_text(routes_xml(network.spec, network.vehicles, network.net_params.inflows))
-        modes = {g.veh_id: (int(g.car_following_params.speed_mode),
-                            int(g.lane_change_params.lane_change_mode))
-                 for g in network.vehicles.groups}  # fmt: skip
-    finally:
-        env.close()
-    e = cfg.env
-    return Setup(net, rou, modes, cfg.sim.sim_step, e.sims_per_step,
-                 int(e.warmup_steps + e.horizon), name.startswith("merge"))  # fmt: skip
+    return write_setup(cfg, out, f"{name}-{setup}", name.startswith("merge"))
 
 
-def run(traci: Any, sumo: str, s: Setup, seed: int) -> tuple[float, int]:
-    """(mean speed m/s or outflow veh/h, teleports) of one run."""
+def run(traci: Any, sumo: str, s: Setup, seed: int, window_s: float = 500.0) -> tuple[float, int]:
+    """(mean speed m/s, or outflow veh/h over the last ``window_s`` s; teleports) of one run
+    over TraCI, started as Flow's kernel starts SUMO; each car gets its type's speed and
+    lane-change modes when it departs."""
     traci.start([sumo, "-n", str(s.net), "-r", str(s.rou), "--step-length", str(s.step),
                  "--no-step-log", "true", "--no-warnings", "true", "--time-to-teleport", "-1",
                  "--collision.check-junctions", "true", "--seed", str(seed)])  # fmt: skip
     total = s.env_steps * s.sims_per_step
-    window = round(500.0 / s.step)
+    window = round(window_s / s.step)
     speeds: list[float] = []
     arrived = teleports = 0
     try:
