@@ -20,6 +20,7 @@ import argparse
 import statistics
 import sys
 import tempfile
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -39,17 +40,40 @@ def write_files(inflow: float, out: Path, overrides: tuple[str, ...], seconds: f
     return replace(setup, sims_per_step=1, env_steps=round(seconds / setup.step))
 
 
-def main() -> None:
-    """Print the outflow-inflow table of one SUMO build."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sumo", default=None, help="sumo binary (default: the wheel's)")
-    parser.add_argument("--traci", default=None, help="folder holding that SUMO's traci")
-    parser.add_argument("--inflows", default="1600,2000,2100,2300,2500,3200")
+def table_options(parser: argparse.ArgumentParser, inflows: str) -> None:
+    """The options of an outflow-inflow table (``capacity_drop.py``'s too)."""
+    parser.add_argument("--inflows", default=inflows, help="comma-separated inflows, veh/h")
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--seconds", type=float, default=800.0)
     parser.add_argument("--window", type=float, default=500.0)
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="config override, as flowrun's --set (repeatable)")  # fmt: skip
+
+
+def print_table(args: argparse.Namespace, what: str, last: str,
+                runs: Callable[[float], Sequence[tuple[float, float]]],
+                total: Callable[[list[float]], float]) -> None:  # fmt: skip
+    """Print an outflow-inflow table in Markdown: a line saying ``what`` ran, then per inflow
+    of ``args.inflows`` the mean outflow of its ``runs`` (one ``(outflow, x)`` per seed), the
+    std over seeds, and ``total`` of the runs' ``x`` in column ``last``."""
+    print(f"{what}, {args.seconds:.0f} s per run, outflow over the last {args.window:.0f} s, "
+          f"{args.seeds} seed(s) {' '.join(args.set)}\n")  # fmt: skip
+    print(f"| inflow (veh/h) | outflow (veh/h) | std | {last} |")
+    print("|---:|---:|---:|---:|")
+    for inflow in (float(v) for v in args.inflows.split(",")):
+        pairs = runs(inflow)
+        out = [o for o, _ in pairs]
+        std = statistics.stdev(out) if len(out) > 1 else 0.0
+        print(f"| {inflow:.0f} | {statistics.mean(out):.0f} | {std:.0f} | "
+              f"{total([x for _, x in pairs]):.0f} |")  # fmt: skip
+
+
+def main() -> None:
+    """Print the outflow-inflow table of one SUMO build."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sumo", default=None, help="sumo binary (default: the wheel's)")
+    parser.add_argument("--traci", default=None, help="folder holding that SUMO's traci")
+    table_options(parser, "1600,2000,2100,2300,2500,3200")
     args = parser.parse_args()
     if args.traci:
         sys.path.insert(0, args.traci)  # that version's client, before the wheel's
@@ -58,18 +82,13 @@ def main() -> None:
     from flowrun.networks.build import sumo_binary
 
     sumo = args.sumo or sumo_binary("sumo")
-    print(f"{sumo} (traci {traci.__file__}), {args.seconds:.0f} s per run, outflow over the last "
-          f"{args.window:.0f} s, {args.seeds} seed(s) {' '.join(args.set)}\n")  # fmt: skip
-    print("| inflow (veh/h) | outflow (veh/h) | std | teleports |")
-    print("|---:|---:|---:|---:|")
     with tempfile.TemporaryDirectory() as tmp:
-        for inflow in (float(v) for v in args.inflows.split(",")):
+
+        def runs(inflow: float) -> list[tuple[float, int]]:
             setup = write_files(inflow, Path(tmp), tuple(args.set), args.seconds)
-            runs = [run(traci, sumo, setup, s, args.window) for s in range(args.seeds)]
-            out = [o for o, _ in runs]
-            std = statistics.stdev(out) if len(out) > 1 else 0.0
-            print(f"| {inflow:.0f} | {statistics.mean(out):.0f} | {std:.0f} | "
-                  f"{sum(t for _, t in runs)} |")  # fmt: skip
+            return [run(traci, sumo, setup, s, args.window) for s in range(args.seeds)]
+
+        print_table(args, f"{sumo} (traci {traci.__file__})", "teleports", runs, sum)
 
 
 if __name__ == "__main__":

@@ -13,10 +13,14 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 from pathlib import Path
 
 from flowrun.envs.factory import make_env
 from flowrun.loading.loader import load_config, override_config
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bottleneck_sumo import print_table, table_options  # bench/, beside this file
 
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "bottleneck.yaml"
 
@@ -50,25 +54,14 @@ def measure_outflow(
 def main() -> None:
     """Print the outflow-inflow table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--inflows", default="800,1200,1600,2000,2400,2800,3200",
-                        help="comma-separated inflows, veh/h")  # fmt: skip
-    parser.add_argument("--seeds", type=int, default=3)
-    parser.add_argument("--seconds", type=float, default=800.0)
-    parser.add_argument("--window", type=float, default=500.0)
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="config override, as flowrun's --set (repeatable)")  # fmt: skip
+    table_options(parser, "800,1200,1600,2000,2400,2800,3200")
     args = parser.parse_args()
-    print(f"bottleneck (scaling 1), {args.seconds:.0f} s per run, outflow over the last "
-          f"{args.window:.0f} s, {args.seeds} seed(s) {' '.join(args.set)}\n")  # fmt: skip
-    print("| inflow (veh/h) | outflow (veh/h) | std | waiting to enter |")
-    print("|---:|---:|---:|---:|")
-    for inflow in (float(v) for v in args.inflows.split(",")):
-        runs = [measure_outflow(inflow, s, args.seconds, args.window, tuple(args.set))
+
+    def runs(inflow: float) -> list[tuple[float, int]]:
+        return [measure_outflow(inflow, s, args.seconds, args.window, tuple(args.set))
                 for s in range(args.seeds)]  # fmt: skip
-        out = [o for o, _ in runs]
-        std = statistics.stdev(out) if len(out) > 1 else 0.0
-        waiting = statistics.mean(w for _, w in runs)
-        print(f"| {inflow:.0f} | {statistics.mean(out):.0f} | {std:.0f} | {waiting:.0f} |")
+
+    print_table(args, "bottleneck (scaling 1)", "waiting to enter", runs, statistics.mean)
 
 
 if __name__ == "__main__":
