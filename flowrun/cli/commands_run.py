@@ -15,9 +15,11 @@ from flowrun.cli.common import (
     DEFAULT_OUT,
     AnyConfigArg,
     ConfigArg,
+    NoRecordOpt,
     OutOpt,
     SeedOpt,
     SetOpt,
+    StepsOpt,
     guarded,
     interrupt_between_steps,
     interrupted_exit,
@@ -61,16 +63,11 @@ def baseline(
     config: AnyConfigArg,
     runs: Annotated[int, typer.Option("--runs", metavar="N",
     help="Number of runs.")] = 1,
-    steps: Annotated[
-        int | None, typer.Option(
-            "--steps",
-            metavar="N",
-            help="Steps per run (default: env.horizon).")
-    ] = None,
+    steps: StepsOpt = None,
     seed: SeedOpt = None,
     set_: SetOpt = None,
     out: OutOpt = DEFAULT_OUT,
-    no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
+    no_record: NoRecordOpt = False,
     record_every: Annotated[int, typer.Option(
         "--record-every",
         metavar="N",

@@ -28,9 +28,11 @@ from flowrun.cli.commands_run import console
 from flowrun.cli.common import (
     DEFAULT_OUT,
     AnyConfigArg,
+    NoRecordOpt,
     OutOpt,
     SeedOpt,
     SetOpt,
+    StepsOpt,
     guarded,
     interrupted_exit,
     overrides_with_seed,
@@ -126,14 +128,9 @@ def sweep(
             metavar="NAME",
             help="Metric plotted against the first --grid key.")
     ] = "mean_speed",
-    steps: Annotated[
-        int | None, typer.Option(
-            "--steps",
-            metavar="N",
-            help="Steps per run (default: env.horizon).")
-    ] = None,
+    steps: StepsOpt = None,
     runs: Annotated[int, typer.Option("--runs", metavar="N", help="Runs per point.")] = 1,
-    no_record: Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")] = False,
+    no_record: NoRecordOpt = False,
     backend: Annotated[
         str | None,
         typer.Option(

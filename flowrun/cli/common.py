@@ -61,6 +61,12 @@ SeedOpt = Annotated[
     int | None,
     typer.Option("--seed", metavar="N", help="Seed (overrides sim.seed and any --set of it)."),
 ]
+# Options of ``flowrun baseline`` that ``flowrun sweep`` also takes and passes on to it.
+StepsOpt = Annotated[
+    int | None,
+    typer.Option("--steps", metavar="N", help="Steps per run (default: env.horizon)."),
+]
+NoRecordOpt = Annotated[bool, typer.Option("--no-record", help="Do not write MCAP logs.")]
 #: How the help of every ``--out`` starts: the option always names a folder.
 OUT_HELP = "Folder that receives"
 
