@@ -233,14 +233,11 @@ def create_run_dir(
     base = folder if folder is not None else out / _safe_name(cfg.name) / run_dir_name(seed)
     check_sumo_path(base, "run folder")
     run_dir = unique_dir(base)
-    try:
+    with _removed_if_unwritable(run_dir):
         (run_dir / "config.yaml").write_text(dump_config(cfg))
         command = argv if argv is not None else sys.argv
         (run_dir / "command.txt").write_text(shlex.join(command) + "\n")
         write_json(run_dir / "versions.json", versions())
-    except OSError as err:
-        shutil.rmtree(run_dir, ignore_errors=True)
-        raise FlowrunError(f"cannot write run folder {run_dir}: {describe_os_error(err)}") from None
     return run_dir
 
 
@@ -253,12 +250,20 @@ def start_run(
 ) -> Path:
     """:func:`create_run_dir`, then mark it ``running`` (with this process's pid and host)."""
     run_dir = create_run_dir(out, cfg, seed, argv, folder)
-    try:
+    with _removed_if_unwritable(run_dir):
         mark_running(run_dir)
+    return run_dir
+
+
+@contextmanager
+def _removed_if_unwritable(run_dir: Path) -> Iterator[None]:
+    """A new run folder's first writes: if one fails (``OSError``), the folder is removed and
+    the error is one :class:`FlowrunError` line."""
+    try:
+        yield
     except OSError as err:
         shutil.rmtree(run_dir, ignore_errors=True)
         raise FlowrunError(f"cannot write run folder {run_dir}: {describe_os_error(err)}") from None
-    return run_dir
 
 
 def _has_results(run_dir: Path) -> bool:
