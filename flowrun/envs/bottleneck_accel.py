@@ -14,6 +14,7 @@ from flowrun.envs.bottleneck_base import (
     BottleneckEnv,
 )
 from flowrun.envs.lane_change_log import LogsLaneChanges
+from flowrun.envs.lane_observation import lane_neighbours
 from flowrun.envs.rewards import desired_velocity
 
 ADDITIONAL_RL_ENV_PARAMS: dict[str, Any] = {
@@ -98,7 +99,7 @@ class BottleneckAccelEnv(LogsLaneChanges, BottleneckEnv):
         v_max, lanes = net.max_speed(), self._lanes
         own = np.zeros((self.num_rl, 4))
         near = np.zeros((self.num_rl, 4, lanes))
-        near[:, :2] = 1.0  # no car ahead / behind: the largest gap
+        near[:, :2] = 1.0  # AVs away: no car ahead / behind
         for i, rl in enumerate(self.rl_id_list):
             if rl not in vk.table:
                 continue
@@ -106,12 +107,7 @@ class BottleneckAccelEnv(LogsLaneChanges, BottleneckEnv):
             code = int(edge) / EDGE_NORM if edge.isdigit() else -1.0
             own[i] = (vk.get_x_by_id(rl) / POSITION_NORM, vk.get_speed(rl) / v_max,
                       vk.get_lane(rl) / MAX_LANES, code)  # fmt: skip
-            ahead, behind = vk.get_lane_headways(rl), vk.get_lane_tailways(rl)
-            m = min(len(ahead), lanes)
-            near[i, 0, :m] = np.asarray(ahead[:m]) / POSITION_NORM
-            near[i, 1, :m] = np.asarray(behind[:m]) / POSITION_NORM
-            near[i, 2, :m] = np.asarray(vk.get_lane_leaders_speed(rl)[:m]) / v_max
-            near[i, 3, :m] = np.asarray(vk.get_lane_followers_speed(rl)[:m]) / v_max
+            near[i] = lane_neighbours(vk, rl, lanes, POSITION_NORM, v_max)
         per_edge = []
         for edge in self._edges():
             ids = vk.get_ids_by_edge(edge)

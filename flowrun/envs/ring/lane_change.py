@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium.spaces import Box
 
 from flowrun.envs.lane_change_log import LogsLaneChanges
+from flowrun.envs.lane_observation import lane_neighbours
 from flowrun.envs.ring.accel import AccelEnv, clip_unit, fit
 
 ADDITIONAL_ENV_PARAMS: dict[str, Any] = {
@@ -146,18 +147,13 @@ class LaneChangeAccelPOEnv(LaneChangeAccelEnv):
         length, v_max, lanes = net.length(), net.max_speed(), self.num_lanes
         n = self.initial_vehicles.num_rl_vehicles
         near = np.zeros((n, 4, lanes))
-        near[:, :2] = 1.0  # no car ahead / behind: the largest gap
+        near[:, :2] = 1.0  # RL cars missing: no car ahead / behind
         speed = np.zeros(n)
         self.visible = []
         rl_set = set(vk.get_rl_ids())
         rl_ids = [v for v in self.sorted_ids if v in rl_set][:n]
         for i, rl in enumerate(rl_ids):
-            ahead, behind = vk.get_lane_headways(rl), vk.get_lane_tailways(rl)
-            m = min(len(ahead), lanes)
-            near[i, 0, :m] = np.asarray(ahead[:m]) / length
-            near[i, 1, :m] = np.asarray(behind[:m]) / length
-            near[i, 2, :m] = np.asarray(vk.get_lane_leaders_speed(rl)[:m]) / v_max
-            near[i, 3, :m] = np.asarray(vk.get_lane_followers_speed(rl)[:m]) / v_max
+            near[i] = lane_neighbours(vk, rl, lanes, length, v_max)
             speed[i] = vk.get_speed(rl) / v_max
             self.visible += [v for v in vk.get_lane_leaders(rl) + vk.get_lane_followers(rl) if v]
         obs = np.concatenate([near.reshape(-1), speed])
