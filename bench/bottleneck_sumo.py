@@ -25,7 +25,13 @@ from dataclasses import replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from paper_sumo import Setup, run, write_setup  # bench/, beside this file
+from paper_sumo import (  # bench/, beside this file
+    Setup,
+    run,
+    sumo_options,
+    traci_and_sumo,
+    write_setup,
+)
 
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "bottleneck.yaml"
 
@@ -71,17 +77,10 @@ def print_table(args: argparse.Namespace, what: str, last: str,
 def main() -> None:
     """Print the outflow-inflow table of one SUMO build."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sumo", default=None, help="sumo binary (default: the wheel's)")
-    parser.add_argument("--traci", default=None, help="folder holding that SUMO's traci")
+    sumo_options(parser)
     table_options(parser, "1600,2000,2100,2300,2500,3200")
     args = parser.parse_args()
-    if args.traci:
-        sys.path.insert(0, args.traci)  # that version's client, before the wheel's
-    import traci
-
-    from flowrun.networks.build import sumo_binary
-
-    sumo = args.sumo or sumo_binary("sumo")
+    traci, sumo = traci_and_sumo(args)
     with tempfile.TemporaryDirectory() as tmp:
 
         def runs(inflow: float) -> list[tuple[float, int]]:

@@ -126,13 +126,30 @@ def run(traci: Any, sumo: str, s: Setup, seed: int, window_s: float = 500.0) -> 
     return (statistics.fmean(speeds) if s.speed else arrived * 3600.0 / seconds), teleports
 
 
+def sumo_options(parser: argparse.ArgumentParser) -> None:
+    """``--sumo BIN --traci DIR``: the SUMO build to run and its TraCI client."""
+    parser.add_argument("--sumo", default=None, help="sumo binary (default: the wheel's)")
+    parser.add_argument("--traci", default=None, help="folder holding that SUMO's traci")
+
+
+def traci_and_sumo(args: argparse.Namespace) -> tuple[Any, str]:
+    """The ``traci`` module of ``--traci`` (imported before anything imports the wheel's) and
+    the sumo binary of ``--sumo`` (default: the wheel's)."""
+    if args.traci:
+        sys.path.insert(0, args.traci)  # that version's client, before the wheel's
+    import traci
+
+    from flowrun.networks.build import sumo_binary
+
+    return traci, args.sumo or sumo_binary("sumo")
+
+
 def main() -> None:
     """Print one benchmark's all-human baseline per seed on one SUMO build."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("benchmark", choices=sorted(PAPER))
     parser.add_argument("--setup", choices=("flowrun", "paper"), default="flowrun")
-    parser.add_argument("--sumo", default=None, help="sumo binary (default: the wheel's)")
-    parser.add_argument("--traci", default=None, help="folder holding that SUMO's traci")
+    sumo_options(parser)
     parser.add_argument(
         "--netconvert", default=None, help="netconvert binary (default: the wheel's)"
     )
@@ -140,13 +157,7 @@ def main() -> None:
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="config override, as flowrun's --set (repeatable)")  # fmt: skip
     args = parser.parse_args()
-    if args.traci:
-        sys.path.insert(0, args.traci)  # that version's client, before the wheel's
-    import traci
-
-    from flowrun.networks.build import sumo_binary
-
-    sumo = args.sumo or sumo_binary("sumo")
+    traci, sumo = traci_and_sumo(args)
     with tempfile.TemporaryDirectory() as tmp:
         setup = write_files(args.benchmark, args.setup, Path(tmp), tuple(args.set), args.netconvert)
         what = "mean speed (m/s)" if setup.speed else "outflow, last 500 s (veh/h)"
