@@ -16,9 +16,10 @@ def did_you_mean(name: str, choices: Iterable[str]) -> str:
     return ""
 
 
-def unknown_name(kind: str, name: str, choices: Iterable[str]) -> str:
-    """Message for an unknown name of some kind, listing the valid ones."""
-    options = sorted(choices)
+def unknown_name(kind: str, name: str, choices: Iterable[str], *, sort: bool = True) -> str:
+    """Message for an unknown name of some kind, listing the valid ones (sorted, or in the
+    order given with ``sort=False``)."""
+    options = sorted(choices) if sort else list(choices)
     return f"unknown {kind} '{name}'{did_you_mean(name, options)}; expected one of: " + ", ".join(
         options
     )

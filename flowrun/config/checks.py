@@ -28,7 +28,7 @@ from flowrun.config.params import (
     VehicleType,
 )
 from flowrun.config.vtype import LANE_CHANGE_MODELS
-from flowrun.suggest import did_you_mean
+from flowrun.suggest import did_you_mean, unknown_name
 
 Check = Callable[[Any], str | None]
 
@@ -248,11 +248,8 @@ def one_of(kind: str, names: Collection[str], allow_int: bool = False) -> Check:
             return None if value >= 0 else f"must be a name or an int >= 0, got {value}"
         if value in names:
             return None
-        return (
-            f"unknown {kind} '{value}'{did_you_mean(str(value), names)}; "
-            f"expected one of: {', '.join(names)}"
-            + (" (or an integer bit set)" if allow_int else "")
-        )
+        bits = " (or an integer bit set)" if allow_int else ""
+        return unknown_name(kind, str(value), names, sort=False) + bits
 
     return check
 

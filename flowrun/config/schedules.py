@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from flowrun.errors import ConfigError
-from flowrun.suggest import did_you_mean
+from flowrun.suggest import unknown_name
 
 # Hyper-parameters SB3 accepts as a schedule (a float or a function of progress_remaining).
 SCHEDULE_PARAMS = ("learning_rate", "clip_range", "clip_range_vf", "delta_std")
@@ -57,11 +57,7 @@ def parse_schedule(value: Any, path: str) -> float | Callable[[float], float]:
         )
     ((kind, arg),) = value.items()
     if kind not in KINDS:
-        raise ConfigError(
-            f"unknown schedule '{kind}'{did_you_mean(str(kind), KINDS)}; "
-            f"expected one of: {', '.join(KINDS)}",
-            path,
-        )
+        raise ConfigError(unknown_name("schedule", str(kind), KINDS, sort=False), path)
     if kind == "constant":
         return _number(arg, f"{path}.constant")
     if isinstance(arg, list):

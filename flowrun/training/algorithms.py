@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from flowrun.config.schedules import SCHEDULE_PARAMS, parse_schedule
 from flowrun.errors import ConfigError
-from flowrun.suggest import did_you_mean
+from flowrun.suggest import did_you_mean, unknown_name
 from flowrun.training.deps import require
 
 if TYPE_CHECKING:
@@ -52,9 +52,7 @@ def algorithm_class(name: str) -> type[BaseAlgorithm]:
     """The SB3 class of an algorithm name (imports the train extra)."""
     if name not in ALGORITHMS:
         raise ConfigError(
-            f"unknown algorithm '{name}'{did_you_mean(name, ALGORITHMS)}; "
-            f"expected one of: {', '.join(ALGORITHMS)}",
-            "train.algorithm",
+            unknown_name("algorithm", name, ALGORITHMS, sort=False), "train.algorithm"
         )
     module, cls = ALGORITHMS[name]
     found: type[BaseAlgorithm] = getattr(require(module), cls)
@@ -122,11 +120,7 @@ def _action_noise(value: Any, path: str, action_dim: int | None) -> Any:
         )
     ((kind, sigma),) = value.items()
     if kind not in NOISE_KINDS:
-        raise ConfigError(
-            f"unknown action noise '{kind}'{did_you_mean(str(kind), NOISE_KINDS)}; "
-            f"expected one of: {', '.join(NOISE_KINDS)}",
-            path,
-        )
+        raise ConfigError(unknown_name("action noise", str(kind), NOISE_KINDS, sort=False), path)
     if isinstance(sigma, bool) or not isinstance(sigma, int | float) or sigma < 0:
         raise ConfigError(f"expected a noise std >= 0, got {sigma!r}", f"{path}.{kind}")
     import numpy as np

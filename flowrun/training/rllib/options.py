@@ -20,7 +20,7 @@ from typing import Any
 
 from flowrun.config.model import TrainConfig
 from flowrun.errors import ConfigError
-from flowrun.suggest import did_you_mean
+from flowrun.suggest import did_you_mean, unknown_name
 
 #: ``PPOConfig`` methods whose parameters ``train.rllib`` may set.
 SECTIONS = ("training", "env_runners", "learners", "rl_module", "reporting")
@@ -153,10 +153,8 @@ def check_train_config(tc: TrainConfig) -> dict[str, dict[str, Any]]:
             f"expected a whole number >= 0, got {tc.num_env_runners!r}", "train.num_env_runners"
         )
     if tc.policies not in POLICY_MODES:
-        hint = did_you_mean(tc.policies, POLICY_MODES)
         raise ConfigError(
-            f"unknown policies '{tc.policies}'{hint}; expected one of: {', '.join(POLICY_MODES)}",
-            "train.policies",
+            unknown_name("policies", tc.policies, POLICY_MODES, sort=False), "train.policies"
         )
     if tc.hyperparams:
         raise ConfigError(
