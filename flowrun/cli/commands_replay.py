@@ -72,10 +72,10 @@ def _repair(logs: list[Path]) -> None:
         raise interrupted_exit(
             err, f"repair stopped; nothing was written to {dst} and {src} is unchanged"
         ) from None
-    state = "damaged" if report.salvaged else "intact"
+    state = "a damaged" if report.salvaged else "an intact"
     until = f" up to t={report.end_time:.1f} s" if report.end_time is not None else ""
     typer.echo(
-        f"wrote {dst}: {report.frames} logged steps{until} from a {state} log "
+        f"wrote {dst}: {report.frames} logged steps{until} from {state} log "
         f"({report.recovered_bytes} of {report.input_bytes} bytes usable)"
     )
 
