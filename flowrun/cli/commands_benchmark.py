@@ -197,6 +197,9 @@ def benchmark(
 ) -> None:
     """Run Flow's benchmarks: each one's non-RL baseline over --seeds seeds, in parallel.
 
+    With --train, also each benchmark's policy, trained once per seed and scored beside the
+    baseline on the same evaluation episodes.
+
     Prints one table: benchmark, Flow's metric, mean ± std over seeds, Flow's reference.
 
     Metrics: mean speed (figure eight, merge), -delay (grid), last 500 s outflow (bottleneck).
