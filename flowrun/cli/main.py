@@ -29,7 +29,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "eval": ("commands_train", "Roll out a trained policy beside its baseline."),
     "replay": ("commands_replay", "Summarise, compare, plot, export or repair MCAP logs."),
     "sweep": ("commands_sweep", "Run a baseline for every combination of --grid values."),
-    "benchmark": ("commands_benchmark", "Run Flow's benchmarks' baselines (--train: and policies)."),
+    "benchmark": ("commands_benchmark", "Run Flow's benchmarks: baselines, policies with --train."),
     "validate": ("commands_config", "Check a config, then print it resolved as YAML."),
     "list": ("commands_config", "List the env, network or controller names."),
     "convert": ("commands_convert", "Print a Flow config module as a YAML config."),
