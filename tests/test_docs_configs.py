@@ -40,4 +40,3 @@ def test_a_config_shown_in_the_docs_validates(where: str, text: str, tmp_path: P
     file.write_text(text)
     cfg = validate_config(file)
     assert cfg.name and cfg.vehicles, where
-
