@@ -169,3 +169,16 @@ def test_train_refuses_before_making_a_run_folder(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="single-lane"):
         train(wave("network.lanes=2"), out=tmp_path)
     assert not any(tmp_path.iterdir())
+
+
+def test_baseline_of_a_numpy_config_is_refused_at_its_file_and_line(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from flowrun.cli.main import app
+
+    config = Path("configs/ring_wave_numpy.yaml")
+    line = config.read_text().splitlines().index("  backend: numpy") + 1
+    result = CliRunner().invoke(app, ["baseline", str(config), "--out", str(tmp_path)])
+    assert result.exit_code == 1
+    assert f"{config}:{line}: sim.backend: flowrun baseline runs on SUMO only" in result.output
+    assert not any(tmp_path.iterdir())

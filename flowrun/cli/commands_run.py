@@ -30,7 +30,7 @@ from flowrun.cli.common import (
 )
 from flowrun.cli.feedback import Feedback
 from flowrun.cli.tables import metrics_table, signals_table
-from flowrun.errors import FlowrunError
+from flowrun.errors import ConfigError, FlowrunError
 
 if TYPE_CHECKING:
     from flowrun.config.model import ExperimentConfig
@@ -101,10 +101,15 @@ def baseline(
     Ctrl-C or SIGTERM finishes the logs and exits 130 / 143.
     """
     from flowrun.experiment.baseline import resolve_steps
+    from flowrun.fastring.plan import refuse_numpy_backend
     from flowrun.preflight.checks import preflight
 
     cfg, where = load_located(config, overrides_with_seed(set_, seed))
     preflight(replace(cfg, train=None), where)  # env class and its params, at file:line
+    try:
+        refuse_numpy_backend(cfg, "flowrun baseline")
+    except ConfigError as err:
+        raise where.error(err.message, ("sim", "backend")) from None
     total = resolve_steps(cfg, steps)
     feedback = Feedback(console)
     what = f"{cfg.name}: {runs} run(s) x {steps_text(total, cfg.env.warmup_steps)}"
