@@ -17,7 +17,8 @@ $(CORE_STAMP): $(BIN)/python pyproject.toml
 	$(BIN)/pip install -e .
 	touch $(CORE_STAMP)
 
-# torch is pinned first so no extra (train, rllib) ever pulls a multi-GB CUDA build.
+# torch is pinned first so no extra (train, rllib) pulls another version; the build (CPU or CUDA)
+# is whichever pip's index offers (README, Install).
 # The rllib extra pins gymnasium==1.2.2 (Ray RLlib's exact pin), so the tests run on that.
 $(FULL_STAMP): $(BIN)/python pyproject.toml
 	$(BIN)/pip install torch==2.13.0
