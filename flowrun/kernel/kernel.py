@@ -98,7 +98,6 @@ class Kernel:
         self.network = NetworkKernel(spec, lanes, network)
         self.vehicle = VehicleKernel(table, spec, self.sim_params.sim_step, rng)
         self.vehicle.read_xy = read_xy
-        self.vehicle.euler = not self.sim_params.use_ballistic
         self.vehicle.group_routers = self.group_routers
         self.vehicle.lane_view = lane_graph(self.network)  # Flow's lane leaders' search
         self.vehicle.attach(api, lanes)

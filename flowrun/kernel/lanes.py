@@ -13,10 +13,6 @@ import numpy as np
 from flowrun.networks.base import NetworkSpec
 from flowrun.types import IntArray
 
-#: m: a car whose position would come this close to its lane's end (or past it) in a step is
-#: read from SUMO, which moves it onto the next lane once it is past the end
-END_MARGIN = 1e-3
-
 
 def lane_edge(lane_id: str) -> tuple[str, int]:
     """Edge id and lane index of a SUMO lane id (``edge_3`` -> ``("edge", 3)``)."""
@@ -33,10 +29,6 @@ class LaneTable:
         edge_index, lane_index, start, speed_limit, length, internal: per lane key.
         alone: per lane key, whether it is its edge's only lane (and False at key -1);
             ``alone_l`` the same as a list.
-        room: per lane key (``room_l`` as a list), the lane positions a car on it may reach
-            in one step and be on it still for sure: below its length less
-            :data:`END_MARGIN` on a lane alone on its edge, none (``-inf``) on any other
-            lane and at key -1.
         edge_starts: every edge's start along the network, m (internal edges included).
     """
 
@@ -62,9 +54,6 @@ class LaneTable:
         #: the end, so that key -1 (none) reads False
         self.alone = np.append(counts[self.edge_index] == 1, False)
         self.alone_l: list[bool] = self.alone.tolist()
-        room = np.where(self.alone[:-1], self.length - END_MARGIN, -np.inf)
-        self.room = np.append(room, -np.inf)
-        self.room_l: list[float] = self.room.tolist()
         #: every edge (internal ones included): (number of lanes, length m, speed limit m/s),
         #: the longest / fastest of its lanes
         self.edge_facts: dict[str, tuple[int, float, float]] = {}

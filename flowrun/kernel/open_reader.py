@@ -9,7 +9,6 @@ asked for them. Leaders come from the lane graph plus SUMO's ``getLeader``
 
 from __future__ import annotations
 
-import logging
 from collections import deque
 from collections.abc import Sequence
 from itertools import chain
@@ -34,10 +33,6 @@ _flatten = chain.from_iterable
 NO_ROWS = np.zeros(0, dtype=np.int64)
 NO_ROWS.flags.writeable = False
 NEVER = -(10**18)  # a clock no step has
-#: steps between two reads of every car's position while the others are predicted
-CHECK_EVERY = 100
-
-log = logging.getLogger(__name__)
 
 
 class OpenReader:
@@ -50,9 +45,6 @@ class OpenReader:
         rng: the generator route choices are drawn from (``ContinuousRouter``).
         api: ``libsumo`` or ``traci``; fast: its compiled getters.
         lanes: the network's lanes as SUMO built them.
-        euler: SUMO moves the cars with its default Euler update (not ballistic): the
-            positions of cars that stay on their lane follow from their speeds
-            (:meth:`read_place`).
 
     Attributes:
         read_xy_each_step: map coordinates are read at every update (recording).
@@ -64,10 +56,8 @@ class OpenReader:
     """
 
     def __init__(self, table: Population, spec: NetworkSpec, dt: float, rng: np.random.Generator,
-                 api: Any, fast: FastCalls, lanes: LaneTable,
-                 euler: bool = False) -> None:  # fmt: skip
+                 api: Any, fast: FastCalls, lanes: LaneTable) -> None:  # fmt: skip
         self.table, self.spec, self.dt, self.rng = table, spec, dt, rng
-        self.euler = euler
         self.api, self.fast, self.lanes = api, fast, lanes
         self.read_xy_each_step = True
         self.group_routers: Any = None
@@ -91,8 +81,6 @@ class OpenReader:
         self._step_ms = round(dt * 1000)
         self._prev_key = NO_ROWS
         self._prev_pos = np.zeros(0)
-        #: steps whose places were (partly) predicted since every car was last read
-        self._unchecked = 0
         #: the last read's lane keys and positions as handed out and as lists, when it was of
         #: few cars and every car had been read the step before (``None``: not kept)
         self._lists: tuple[IntArray, FloatArray, list[int], list[float]] | None = None
@@ -144,37 +132,37 @@ class OpenReader:
     def read_place(self, speed: FloatArray) -> tuple[IntArray, FloatArray]:
         """Every car's lane key and position on it, this step.
 
-        Where the places of the step just before are known (by SUMO's clock: after a step
-        nobody asked about, or one taken around the kernel, all are read), SUMO's Euler step
-        moved every car by exactly ``speed * dt`` (bit for bit: ``pos += v * dt`` in both):
-
-        - a car on the only lane of its edge whose new position stays short of the lane's
-          end (:attr:`~flowrun.kernel.lanes.LaneTable.room_l`) is on the same lane at that
-          position, and is not read (it cannot change lanes sideways, and SUMO moves it onto
-          the next lane only past the end). This needs SUMO's default Euler update
-          (``euler``) and a car moved only by its speed: after a teleport
-          (:meth:`resync`) all are read, and every :data:`CHECK_EVERY` steps all are read and
-          compared with the prediction, which is dropped for good at the first difference.
-        - any other car (entered, on a multi-lane edge, near its lane's end) has its position
-          read; its lane is asked of SUMO when it may have changed: off the only lane of its
-          edge or moved by anything else than ``speed * dt``.
+        The lane id is asked of SUMO only for the cars that may have changed lanes. Where the
+        places of the step just before were read (by SUMO's clock: after a step nobody asked
+        about, or one taken around the kernel, all are read), a car on the only lane of its
+        edge whose position grew by exactly ``speed * dt`` (SUMO's Euler step, bit for bit)
+        is on the same lane: had it passed onto the next lane, its position would have lost
+        that lane's length, and it cannot change lanes sideways. Any other car (entered, on a
+        multi-lane edge, crossing a lane's end, teleported, moved by a command, or any step
+        method but Euler) is read.
         """
-        lanes, n = self.lanes, len(self.table.ids)
+        fast, lanes, ids = self.fast, self.lanes, self.table.ids
+        n = len(ids)
         prev_key, lists = self._prev_key, self._lists
         self._lists = None
         if self._place_ms == self._now_ms - self._step_ms and prev_key.size == n:
-            predict = self.euler and self._unchecked < CHECK_EVERY
-            self._unchecked = self._unchecked + 1 if predict else 0
-            if n <= SMALL:  # the same on lists: fewer numpy calls (a per-call cost)
+            # (a new row's key is -1: alone[-1] is False)
+            if n <= SMALL:  # the same test on lists: fewer numpy calls (a per-call cost)
                 key_l, prev_l = lists[2:] if lists is not None else (
                     prev_key.tolist(), self._prev_pos.tolist())  # fmt: skip
-                pos_l, moved = self._places_few(speed, key_l, prev_l, predict)
+                pos_l = list(map(fast.get_lane_position, ids))
                 pos = np.array(pos_l, np.float64)
+                dt, alone = self.dt, lanes.alone_l
+                moved = [r for r, p, q, v, k in zip(range(n), pos_l, prev_l, speed.tolist(),
+                                                    key_l, strict=True)
+                         if not (p == q + v * dt and alone[k])]  # fmt: skip
             else:
-                pos, moved = self._places_many(speed, predict)
+                pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
+                same = (pos == self._prev_pos + speed * self.dt) & lanes.alone[prev_key]
+                moved = (~same).nonzero()[0].tolist()  # (np.flatnonzero: a Python layer)
             keys = prev_key  # every car on its lane: the last step's array (read-only)
             if moved:
-                get_lane, ids = self.fast.get_lane_id, self.table.ids
+                get_lane = fast.get_lane_id
                 keys = prev_key.copy()
                 keys[moved] = lanes.keys([get_lane(ids[r]) for r in moved])
                 keys.flags.writeable = False
@@ -182,65 +170,13 @@ class OpenReader:
             if n <= SMALL:
                 self._lists = (keys, pos, keys.tolist() if moved else key_l, pos_l)
         else:
-            ids = self.table.ids
-            pos = np.fromiter(map(self.fast.get_lane_position, ids), np.float64, n)
-            keys = lanes.keys(list(map(self.fast.get_lane_id, ids)))
+            pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
+            keys = lanes.keys(list(map(fast.get_lane_id, ids)))
             keys.flags.writeable = False
             self._route_due = True
-            self._unchecked = 0
         self._prev_key, self._prev_pos = keys, pos.copy()  # (lane_pos is the caller's array)
         self._place_ms = self._now_ms
         return keys, pos
-
-    def _places_few(self, speed: FloatArray, key_l: list[int], prev_l: list[float],
-                    predict: bool) -> tuple[list[float], list[int]]:  # fmt: skip
-        """:meth:`read_place` for few cars, on lists: every car's position and the rows
-        whose lane must be read (``predict``: skip the cars the Euler step places)."""
-        dt, alone, room, ids = self.dt, self.lanes.alone_l, self.lanes.room_l, self.table.ids
-        get_pos = self.fast.get_lane_position
-        pos_l = [q + v * dt for q, v in zip(prev_l, speed.tolist(), strict=True)]
-        if predict:  # read only the cars that may have left their lane
-            moved = []
-            for r in [r for r, p, k in zip(range(len(ids)), pos_l, key_l, strict=True)
-                      if not p < room[k]]:  # fmt: skip (NaN: a new row)
-                p = get_pos(ids[r])
-                if not (p == pos_l[r] and alone[key_l[r]]):
-                    moved.append(r)
-                pos_l[r] = p
-            return pos_l, moved
-        got = list(map(get_pos, ids))
-        moved = [r for r, p, q, k in zip(range(len(ids)), got, pos_l, key_l, strict=True)
-                 if not (p == q and alone[k])]  # fmt: skip
-        if self.euler and any(pos_l[r] < room[key_l[r]] for r in moved):
-            self._predict_failed()
-        return got, moved
-
-    def _places_many(self, speed: FloatArray, predict: bool) -> tuple[FloatArray, list[int]]:
-        """:meth:`read_place` for many cars, in numpy (see :meth:`_places_few`)."""
-        lanes, ids, prev_key = self.lanes, self.table.ids, self._prev_key
-        get_pos = self.fast.get_lane_position
-        pos = self._prev_pos + speed * self.dt
-        if predict:
-            far = (~(pos < lanes.room[prev_key])).nonzero()[0]  # (NaN: a new row)
-            if not far.size:
-                return pos, []
-            got = np.fromiter(map(get_pos, [ids[r] for r in far.tolist()]), np.float64, far.size)
-            moved = far[(got != pos[far]) | ~lanes.alone[prev_key[far]]].tolist()
-            pos[far] = got
-            return pos, moved
-        got = np.fromiter(map(get_pos, ids), np.float64, len(ids))
-        same = (got == pos) & lanes.alone[prev_key]
-        if self.euler and np.count_nonzero(~same & (pos < lanes.room[prev_key])):
-            self._predict_failed()
-        return got, (~same).nonzero()[0].tolist()  # (np.flatnonzero: a Python layer)
-
-    def _predict_failed(self) -> None:
-        """A car predicted on its lane was elsewhere: read every car from now on."""
-        self.euler = False
-        log.warning(
-            "a car was not where SUMO's Euler step puts it (moved by a command or a "
-            "step method other than Euler): reading every car's position from now on"
-        )
 
     def read_xy(self) -> tuple[FloatArray, FloatArray]:
         """Every car's map coordinates (this step), m."""
@@ -333,10 +269,8 @@ class OpenReader:
 
     def resync(self) -> None:
         """Check the population against SUMO's vehicle list at the next update (after a
-        teleport, which the departed/arrived lists do not report), and read every car's
-        place (a teleported car jumped)."""
+        teleport, which the departed/arrived lists do not report)."""
         self._resync = True
-        self._place_ms = NEVER
 
     # ------------------------------------------------------------------ routes
     def _route_continuously(self, edge_index: IntArray) -> None:

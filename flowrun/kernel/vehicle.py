@@ -77,9 +77,6 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
         self.group_routers: Any = None
         #: read every car's map coordinates at every update (else when asked)
         self.read_xy = True
-        #: SUMO moves the cars with its default Euler update: on an open network the places
-        #: of the cars that stay on their lane follow from their speeds (``OpenReader``)
-        self.euler = False
         self.api: Any = None
         self._fast: FastCalls | None = None
         #: (first row, end row) of a group -> (population, its version, the group's facts)
@@ -96,9 +93,7 @@ class VehicleKernel(VehicleCommands, FlowVehicleGetters):
             self.reader = RingReader(self.table, self.initial, self.spec, self.dt, api, fast)
         else:
             lanes = lanes or LaneTable.read(api, self.spec)
-            self.reader = OpenReader(
-                self.table, self.spec, self.dt, self.rng, api, fast, lanes, self.euler
-            )
+            self.reader = OpenReader(self.table, self.spec, self.dt, self.rng, api, fast, lanes)
             self.reader.group_routers = self.group_routers
         self.reader.read_xy_each_step = self.read_xy
 
