@@ -138,6 +138,22 @@ def test_a_bad_sweep_is_one_line_before_anything_runs(
     assert not out.exists()
 
 
+def test_a_numpy_backend_config_is_refused_once_at_its_line_before_any_point(
+    tmp_path: Path,
+) -> None:
+    config = ROOT / "configs" / "ring_wave_numpy.yaml"
+    line = config.read_text().splitlines().index("  backend: numpy") + 1
+    out = tmp_path / "runs"
+    args = ["sweep", str(config), "--grid", "network.length=230,260", "--out", str(out)]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 1
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, lines
+    assert f"{config}:{line}: sim.backend: flowrun baseline runs on SUMO only" in lines[0]
+    assert "--set sim.backend=sumo" in lines[0]
+    assert not out.exists()
+
+
 def test_the_same_sweep_cannot_run_twice_at_once(tmp_path: Path) -> None:
     args = ["sweep", str(SUGIYAMA), "--grid", "network.length=230", "--out", str(tmp_path)]
     plan = plan_sweep(load_config(SUGIYAMA), parse_grid(["network.length=230"]), 1, tmp_path,

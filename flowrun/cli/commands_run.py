@@ -101,15 +101,8 @@ def baseline(
     Ctrl-C or SIGTERM finishes the logs and exits 130 / 143.
     """
     from flowrun.experiment.baseline import resolve_steps
-    from flowrun.fastring.plan import refuse_numpy_backend
-    from flowrun.preflight.checks import preflight
 
-    cfg, where = load_located(config, overrides_with_seed(set_, seed))
-    preflight(replace(cfg, train=None), where)  # env class and its params, at file:line
-    try:
-        refuse_numpy_backend(cfg, "flowrun baseline")
-    except ConfigError as err:
-        raise where.error(err.message, ("sim", "backend")) from None
+    cfg = checked_baseline_config(config, overrides_with_seed(set_, seed))
     total = resolve_steps(cfg, steps)
     feedback = Feedback(console)
     what = f"{cfg.name}: {runs} run(s) x {steps_text(total, cfg.env.warmup_steps)}"
@@ -120,6 +113,25 @@ def baseline(
     result = _run_with_progress(feedback, cfg, runs, total, options)
     _show_result(result, what)
     feedback.close(f"run folder: {result.run_dir}")
+
+
+def checked_baseline_config(config: Path, overrides: list[str]) -> ExperimentConfig:
+    """The config ``flowrun baseline`` runs, after the checks it makes before it starts (also
+    ``flowrun sweep``'s, before any point): the env class and its params, and the SUMO backend.
+
+    Raises:
+        ConfigError: at the ``file:line`` of the key (or its ``--set``).
+    """
+    from flowrun.fastring.plan import refuse_numpy_backend
+    from flowrun.preflight.checks import preflight
+
+    cfg, where = load_located(config, overrides)
+    preflight(replace(cfg, train=None), where)  # env class and its params, at file:line
+    try:
+        refuse_numpy_backend(cfg, "flowrun baseline")
+    except ConfigError as err:
+        raise where.error(err.message, ("sim", "backend")) from None
+    return cfg
 
 
 def _run_with_progress(

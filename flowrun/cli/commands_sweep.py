@@ -69,8 +69,8 @@ def point_command(
 
 def _check_points(config: Path, sets: list[str], plan: SweepPlan, steps: int | None) -> None:
     """Load every grid point's config (and its step count) before anything runs."""
+    from flowrun.cli.commands_run import checked_baseline_config
     from flowrun.experiment.baseline import resolve_steps
-    from flowrun.loading.flow_module import load_any_config
 
     seen: set[tuple[tuple[str, str], ...]] = set()
     for point in plan.points:
@@ -78,7 +78,7 @@ def _check_points(config: Path, sets: list[str], plan: SweepPlan, steps: int | N
             continue
         seen.add(point.values)
         try:
-            resolve_steps(load_any_config(config, [*sets, *point.overrides]), steps)
+            resolve_steps(checked_baseline_config(config, [*sets, *point.overrides]), steps)
         except ConfigError as err:
             where = ", ".join(point.overrides)
             raise ConfigError(f"with --grid {where}: {err}") from None
@@ -207,8 +207,8 @@ def prepare_sweep(request: SweepRequest) -> tuple[SweepPlan, str, list[str]]:
             not load (with its values).
         FlowrunError: an unusable --out, a backend that cannot run.
     """
+    from flowrun.cli.commands_run import checked_baseline_config
     from flowrun.experiment import sweep as sw
-    from flowrun.loading.flow_module import load_any_config
     from flowrun.rundir.folders import check_out_dir
 
     r = request
@@ -219,7 +219,7 @@ def prepare_sweep(request: SweepRequest) -> tuple[SweepPlan, str, list[str]]:
     if r.runs < 1:
         raise ConfigError(f"--runs must be >= 1, got {r.runs}")
     chosen = _backend(r.backend, r.ray_address)
-    cfg = load_any_config(r.config, overrides_with_seed(r.sets, r.seed))
+    cfg = checked_baseline_config(r.config, overrides_with_seed(r.sets, r.seed))
     run_args = [*(["--steps", str(r.steps)] if r.steps is not None else []), "--runs", str(r.runs)]
     run_args += ["--no-record"] if r.no_record else []
     plan = sw.plan_sweep(cfg, axes, r.seeds, r.out, run_args)
