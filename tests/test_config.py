@@ -54,6 +54,7 @@ def test_sugiyama_yaml_loads_into_flow_parameter_objects(tmp_path: Path) -> None
     cfg = load_config(write(tmp_path, SUGIYAMA))
     assert cfg.name == "sugiyama"
     assert cfg.sim.sim_step == 0.1 and cfg.sim.seed == 0
+    assert type(cfg.env.horizon) is int  # a step count, though .inf is allowed
     assert cfg.env.horizon == 3000 and cfg.env.additional_params == {"max_accel": 1, "max_decel": 1}
     assert cfg.network.type == "ring"
     assert cfg.network.net_params.additional_params == {

@@ -42,6 +42,21 @@ def test_validate_prints_the_resolved_config(app: typer.Typer, config: Path) -> 
     assert data["initial"]["spacing"] == "uniform"  # defaults are spelled out
 
 
+@pytest.mark.parametrize(
+    ("value", "shown"), [("3000", "3000"), ("3000.0", "3000"), (".inf", ".inf")]
+)
+def test_validate_prints_step_counts_as_whole_numbers(
+    app: typer.Typer, config: Path, value: str, shown: str
+) -> None:
+    args = ["validate", str(config), "--set", f"env.horizon={value}", "--set", "env.warmup_steps=5"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert f"  horizon: {shown}" in lines and "  warmup_steps: 5" in lines, result.stdout
+    horizon = yaml.safe_load(result.stdout)["env"]["horizon"]
+    assert type(horizon) is (float if shown == ".inf" else int)
+
+
 def test_validate_error_is_one_line_and_exit_code_1(app: typer.Typer, config: Path) -> None:
     result = CliRunner().invoke(app, ["validate", str(config), "--set", "vehicles.0.count=x"])
     assert result.exit_code == 1

@@ -365,6 +365,9 @@ INFINITE_OK: frozenset[tuple[type, str]] = frozenset({
     (SumoLaneChangeParams, "lc_time_to_impatience"),
 })  # fmt: skip
 
+#: Float fields (so that they may be .inf) that count steps: a finite value is kept as an int.
+WHOLE_OR_INF: frozenset[tuple[type, str]] = frozenset({(EnvParams, "horizon")})
+
 # Network parameters shared by Flow's networks; checked here when present, whatever the type.
 # Everything network-specific is checked by ``flowrun.networks.registry.validate_network``.
 NETWORK_NUMBERS: dict[str, tuple[type, Check]] = {

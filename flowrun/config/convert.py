@@ -16,7 +16,7 @@ import types
 from collections.abc import Mapping
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
-from flowrun.config.checks import FIELD_CHECKS, INFINITE_OK, NETWORK_NUMBERS
+from flowrun.config.checks import FIELD_CHECKS, INFINITE_OK, NETWORK_NUMBERS, WHOLE_OR_INF
 from flowrun.config.inflows import CAMEL_CASE
 from flowrun.config.model import NetworkConfig
 from flowrun.config.params import (
@@ -169,6 +169,8 @@ class Converter:
                     raise self.loc.error("must be a number, got .nan", at)
                 if (cls, name) not in INFINITE_OK:
                     raise self.loc.error(f"must be finite, got {raw!r}", at)
+            if (cls, name) in WHOLE_OR_INF and math.isfinite(value):
+                value = int(value)  # 3000 steps, not 3000.0 (checked whole above)
             kwargs[name] = value
             given_as[name] = key
         for name, f in fields.items():
