@@ -149,7 +149,7 @@ def test_a_numpy_backend_config_is_refused_once_at_its_line_before_any_point(
     assert result.exit_code == 1
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, lines
-    assert f"{config}:{line}: sim.backend: flowrun baseline runs on SUMO only" in lines[0]
+    assert f"{config}:{line}: sim.backend: flowrun sweep runs on SUMO only" in lines[0]
     assert "--set sim.backend=sumo" in lines[0]
     assert not out.exists()
 

@@ -115,9 +115,13 @@ def baseline(
     feedback.close(f"run folder: {result.run_dir}")
 
 
-def checked_baseline_config(config: Path, overrides: list[str]) -> ExperimentConfig:
+def checked_baseline_config(
+    config: Path, overrides: list[str], command: str = "flowrun baseline"
+) -> ExperimentConfig:
     """The config ``flowrun baseline`` runs, after the checks it makes before it starts (also
     ``flowrun sweep``'s, before any point): the env class and its params, and the SUMO backend.
+
+    ``command`` names the refusing command in the message.
 
     Raises:
         ConfigError: at the ``file:line`` of the key (or its ``--set``).
@@ -128,7 +132,7 @@ def checked_baseline_config(config: Path, overrides: list[str]) -> ExperimentCon
     cfg, where = load_located(config, overrides)
     preflight(replace(cfg, train=None), where)  # env class and its params, at file:line
     try:
-        refuse_numpy_backend(cfg, "flowrun baseline")
+        refuse_numpy_backend(cfg, command)
     except ConfigError as err:
         raise where.error(err.message, ("sim", "backend")) from None
     return cfg

@@ -78,7 +78,8 @@ def _check_points(config: Path, sets: list[str], plan: SweepPlan, steps: int | N
             continue
         seen.add(point.values)
         try:
-            resolve_steps(checked_baseline_config(config, [*sets, *point.overrides]), steps)
+            overrides = [*sets, *point.overrides]
+            resolve_steps(checked_baseline_config(config, overrides, "flowrun sweep"), steps)
         except ConfigError as err:
             where = ", ".join(point.overrides)
             raise ConfigError(f"with --grid {where}: {err}") from None
@@ -219,7 +220,8 @@ def prepare_sweep(request: SweepRequest) -> tuple[SweepPlan, str, list[str]]:
     if r.runs < 1:
         raise ConfigError(f"--runs must be >= 1, got {r.runs}")
     chosen = _backend(r.backend, r.ray_address)
-    cfg = checked_baseline_config(r.config, overrides_with_seed(r.sets, r.seed))
+    overrides = overrides_with_seed(r.sets, r.seed)
+    cfg = checked_baseline_config(r.config, overrides, "flowrun sweep")
     run_args = [*(["--steps", str(r.steps)] if r.steps is not None else []), "--runs", str(r.runs)]
     run_args += ["--no-record"] if r.no_record else []
     plan = sw.plan_sweep(cfg, axes, r.seeds, r.out, run_args)
