@@ -190,7 +190,7 @@ def test_all_human_baseline_drives_the_av_like_the_humans() -> None:
 
 
 def test_a_config_of_only_rl_cars_is_evaluated_without_an_all_human_baseline() -> None:
-    from flowrun.training.periodic_eval import all_human_or_none
+    from flowrun.training.comparison import all_human_or_none
 
     benchmarks = Path(__file__).resolve().parents[1] / "configs" / "benchmarks"
     only_rl = load_config(benchmarks / "figureeight2.yaml")  # 14 AVs, no human group

@@ -48,13 +48,6 @@ class Comparison:
         """Its row label in tables: ``baseline`` (a benchmark's own) or ``all-human``."""
         return "baseline" if self.kind == BENCHMARK else ALL_HUMAN
 
-    @property
-    def scores_return(self) -> bool:
-        """Whether its episode return is a score: a benchmark's baseline runs in evaluate
-        mode, where the return is the benchmark's metric (-delay for the grids); the
-        all-human rollout's return sums rewards meant for an RL agent."""
-        return self.kind == BENCHMARK
-
 
 def all_human(cfg: ExperimentConfig) -> ExperimentConfig:
     """The config with each RL group driven like the first human group."""

@@ -41,7 +41,7 @@ from flowrun.rundir.folders import (
 )
 from flowrun.training.algorithms import algorithm_class
 from flowrun.training.comparison import Comparison, comparison_baseline
-from flowrun.training.periodic_eval import all_human as all_human
+from flowrun.training.comparison import all_human as all_human
 from flowrun.training.trainer import (
     BEST_MODEL,
     BEST_VECNORMALIZE,

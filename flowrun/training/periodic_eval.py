@@ -31,8 +31,6 @@ import numpy as np
 
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import TrainingError
-from flowrun.training.comparison import all_human as all_human
-from flowrun.training.comparison import all_human_or_none as all_human_or_none
 from flowrun.training.comparison import comparison_baseline
 from flowrun.training.deps import require
 from flowrun.training.policy_functions import Act as Act
