@@ -63,13 +63,30 @@ def test_other_configs_are_compared_with_their_all_human_version() -> None:
 
 
 def test_a_config_named_like_a_benchmark_that_its_baseline_does_not_fit_is_one_error() -> None:
-    cfg = load_config(ROOT / "configs" / "ring_wave.yaml", ["name=grid0"])
+    # the bottleneck baseline switches off vehicle group 1 (the AVs): a one-group bottleneck
+    # config named bottleneck0 has none
+    cfg = load_config(ROOT / "configs" / "bottleneck.yaml", ["name=bottleneck0"])
     with pytest.raises(ConfigError) as err:
         comparison_baseline(cfg)
     text = str(err.value)
-    assert text.startswith(f"{cfg.source}: traffic_lights.controller: this config is named grid0")
-    assert "--set 'traffic_lights.controller=actuated'" in text
+    assert text.startswith("--set: vehicles[1]: this config is named bottleneck0")
+    assert "--set 'vehicles.1.count=0'" in text and "index 1 is out of range" in text
     assert "rename the config (name:)" in text
+
+
+def test_a_config_named_like_a_benchmark_on_another_network_is_one_error(tmp_path: Path) -> None:
+    # the figure eight's baseline overrides (14 humans, evaluate mode) would fit a ring: the
+    # network type decides, so a ring named figureeight0 is never compared with the figure eight
+    text = (ROOT / "configs" / "ring_wave.yaml").read_text(encoding="utf-8")
+    path = tmp_path / "ring.yaml"
+    path.write_text(text.replace("name: ring_wave", "name: figureeight0"), encoding="utf-8")
+    line = 1 + [ln.strip() for ln in text.splitlines()].index("type: ring")
+    with pytest.raises(ConfigError) as err:
+        comparison_baseline(load_config(path))
+    assert str(err.value).startswith(f"{path}:{line}: network.type: this config is named "
+                                     "figureeight0, but its network is 'ring', not the "
+                                     "benchmark's 'figure_eight'")
+    assert "rename the config (name:)" in str(err.value)
 
 
 def test_compare_table_shows_a_benchmark_baselines_return() -> None:

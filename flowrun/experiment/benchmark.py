@@ -110,6 +110,11 @@ class Benchmark:
         """What the baseline is, in a few words (``SUMO's actuated lights``)."""
         return BASELINE_NOTES[self.family]
 
+    @property
+    def network_type(self) -> str:
+        """The ``network.type`` of its config (``figure_eight``)."""
+        return FAMILY_NETWORKS[self.family]
+
 
 #: What each family's baseline is, for tables and ``flowrun eval``.
 BASELINE_NOTES = {
@@ -117,6 +122,14 @@ BASELINE_NOTES = {
     "merge": "no AV, the whole inflow human",
     "grid": "SUMO's actuated lights",
     "bottleneck": "no AV, the whole inflow human",
+}
+
+#: Each family's network type (``network.type`` in its configs).
+FAMILY_NETWORKS = {
+    "figureeight": "figure_eight",
+    "merge": "merge",
+    "grid": "traffic_light_grid",
+    "bottleneck": "bottleneck",
 }
 
 

@@ -13,12 +13,15 @@ config it is the same config with every RL vehicle group driven like the first h
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from pathlib import Path
+
+import yaml
 
 from flowrun.config.dump import config_to_dict
 from flowrun.config.model import ExperimentConfig
 from flowrun.config.overrides import apply_overrides
 from flowrun.config.params import VehicleParams, is_rl
-from flowrun.config.yamlio import Locations
+from flowrun.config.yamlio import Locations, parse_yaml
 from flowrun.errors import ConfigError
 from flowrun.experiment.benchmark import BENCHMARKS, Benchmark
 from flowrun.loading.loader import config_from_dict
@@ -82,6 +85,14 @@ def benchmark_baseline(cfg: ExperimentConfig, bench: Benchmark) -> ExperimentCon
         ConfigError: the overrides do not fit ``cfg`` (a config named like a benchmark but
             built otherwise), naming the benchmark and its overrides.
     """
+    if cfg.network.type != bench.network_type:
+        raise ConfigError(
+            f"this config is named {bench.name}, but its network is {cfg.network.type!r}, not "
+            f"the benchmark's {bench.network_type!r}; rename the config (name:) to compare with "
+            "its all-human version instead",
+            "network.type",
+            _location(cfg, ("network", "type")),
+        )
     data = config_to_dict(cfg)
     source = cfg.source or "<config>"
     try:
@@ -96,6 +107,15 @@ def benchmark_baseline(cfg: ExperimentConfig, bench: Benchmark) -> ExperimentCon
             err.path,
             err.location,
         ) from None
+
+
+def _location(cfg: ExperimentConfig, path: tuple[str, ...]) -> str:
+    """``file:line`` of ``path`` in the YAML file ``cfg`` was loaded from, else its source."""
+    source = cfg.source or "<config>"
+    try:
+        return parse_yaml(Path(source).read_text(encoding="utf-8"), source)[1].of(path)
+    except (OSError, ConfigError, yaml.YAMLError):
+        return source
 
 
 def comparison_baseline(cfg: ExperimentConfig) -> Comparison | None:
