@@ -46,10 +46,17 @@ class CountingReader:
             edge_index=np.array([0, 1]), edge_names=["a", ":j"],
         )  # fmt: skip
         self.read_xy_each_step = False
+        #: the lane keys of every read (the same array: no car changes lanes)
+        self.keys = np.array([1, 0])
+        self.columns: dict[str, object] = {}
 
     def read_place(self, speed: FloatArray) -> tuple[IntArray, FloatArray]:
         self.reads["place"] += 1
-        return np.array([1, 0]), np.array([5.0, 7.0])
+        return self.keys, np.array([5.0, 7.0])
+
+    def columns_at(self, keys: IntArray) -> dict[str, object]:
+        assert keys is self.keys
+        return self.columns
 
     def read_xy(self) -> tuple[FloatArray, FloatArray]:
         self.reads["xy"] += 1
@@ -83,3 +90,17 @@ def test_open_state_reads_each_field_once_when_first_asked() -> None:
     assert reader.reads == {"place": 1, "xy": 0, "following": 1, "odometer": 0}
     assert state.x.tolist() == [1.0, 2.0] and state.odometer.tolist() == [50.0, 60.0]
     assert reader.reads == {"place": 1, "xy": 1, "following": 1, "odometer": 1}
+
+
+def test_open_states_on_the_same_lane_keys_share_the_lane_columns_looked_up() -> None:
+    reader = CountingReader()
+    first = OpenState(np.array([8.0, 9.0]), np.array([7.0, 9.0]), 0.5, reader)  # type: ignore[arg-type]
+    limit = first.speed_limit
+    assert first.lanes.tolist() == [1, 0]
+    assert first.commandable(np.array([1.0, 1.0]), slice(None)).tolist()[1] == 1.0
+    second = OpenState(np.array([6.0, 9.0]), np.array([8.0, 9.0]), 0.5, reader)  # type: ignore[arg-type]
+    second.lanes = np.array([3, 3])  # a field assigned before the lanes are read stays
+    assert second.position.tolist() == [205.0, 107.0]
+    assert second.speed_limit is limit and not limit.flags.writeable
+    assert second.lanes.tolist() == [3, 3]
+    assert np.isnan(second.commandable(np.array([1.0, 1.0]), slice(None))).tolist() == [True, False]

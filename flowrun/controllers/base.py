@@ -12,6 +12,7 @@ its class attributes ``is_rl`` / ``commands_sumo`` say so up front.
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 from collections.abc import Sequence
@@ -108,6 +109,13 @@ DISPLAY_WARNINGS = Param(
     convert=lambda owner, name, value: bool(value),
 )  # fmt: skip
 BASE_PARAMS = (VEH_ID, CAR_FOLLOWING_PARAMS, TIME_DELAY, FAIL_SAFE, NOISE, DISPLAY_WARNINGS)
+
+
+@functools.lru_cache(maxsize=16)
+def _sqrt_of(dt: float) -> FloatArray:
+    """``sqrt(dt)`` as a 0-d float64 array (a ufunc converts a Python float operand at every
+    call; the same value)."""
+    return np.array(math.sqrt(dt))
 
 
 class AccelerationController:
@@ -241,7 +249,7 @@ class AccelerationController:
         if self.is_rl or not self.commands_sumo:
             return accel
         if self.noise > 0:
-            accel = accel + math.sqrt(inputs.dt) * rng.normal(0.0, self.noise, inputs.size)
+            accel = accel + _sqrt_of(inputs.dt) * rng.normal(0.0, self.noise, inputs.size)
         if self.fail_safes:
             accel = apply_fail_safes(self.fail_safes, accel, inputs, self.time_delay)
         return accel

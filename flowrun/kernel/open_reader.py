@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Sequence
-from itertools import chain
+from itertools import chain, repeat
+from operator import add, mul
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -33,6 +34,18 @@ _flatten = chain.from_iterable
 NO_ROWS = np.zeros(0, dtype=np.int64)
 NO_ROWS.flags.writeable = False
 NEVER = -(10**18)  # a clock no step has
+
+
+def _moved_few(pos: list[float], prev: list[float], speed: list[float], keys: list[int],
+               dt: float, alone: list[bool]) -> list[int]:  # fmt: skip
+    """The rows whose position is not the last one plus ``speed * dt``, or whose lane
+    (``keys``) is not its edge's only one: :meth:`OpenReader.read_place`'s test on lists,
+    first on all of them at once (C-level loops; the same float operations)."""
+    if pos == list(map(add, prev, map(mul, speed, repeat(dt)))) and all(map(alone.__getitem__,
+                                                                             keys)):  # fmt: skip
+        return []
+    return [r for r, p, q, v, k in zip(range(len(pos)), pos, prev, speed, keys, strict=True)
+            if not (p == q + v * dt and alone[k])]  # fmt: skip
 
 
 class OpenReader:
@@ -86,6 +99,8 @@ class OpenReader:
         self._lists: tuple[IntArray, FloatArray, list[int], list[float]] | None = None
         #: ContinuousRouter must look at the cars again (see :meth:`route`)
         self._route_due = True
+        #: lane keys and the lane table's columns at them that a state looked up
+        self._columns: tuple[IntArray, dict[str, Any]] = (NO_ROWS, {})
 
     def read(self, first: bool, removed: list[str]) -> OpenState:
         """This step's state: follow the population (``removed``: the cars taken out since the
@@ -152,10 +167,7 @@ class OpenReader:
                     prev_key.tolist(), self._prev_pos.tolist())  # fmt: skip
                 pos_l = list(map(fast.get_lane_position, ids))
                 pos = np.array(pos_l, np.float64)
-                dt, alone = self.dt, lanes.alone_l
-                moved = [r for r, p, q, v, k in zip(range(n), pos_l, prev_l, speed.tolist(),
-                                                    key_l, strict=True)
-                         if not (p == q + v * dt and alone[k])]  # fmt: skip
+                moved = _moved_few(pos_l, prev_l, speed.tolist(), key_l, self.dt, lanes.alone_l)
             else:
                 pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
                 same = (pos == self._prev_pos + speed * self.dt) & lanes.alone[prev_key]
@@ -177,6 +189,14 @@ class OpenReader:
         self._prev_key, self._prev_pos = keys, pos.copy()  # (lane_pos is the caller's array)
         self._place_ms = self._now_ms
         return keys, pos
+
+    def columns_at(self, keys: IntArray) -> dict[str, Any]:
+        """The lane table's columns at ``keys`` looked up so far (by name, see
+        :class:`~flowrun.kernel.state.OpenState`): kept while :meth:`read_place` hands out the
+        same keys array (no car changed lanes), else empty."""
+        if self._columns[0] is not keys:
+            self._columns = (keys, {})
+        return self._columns[1]
 
     def read_xy(self) -> tuple[FloatArray, FloatArray]:
         """Every car's map coordinates (this step), m."""

@@ -41,6 +41,8 @@ class OpenReads(Protocol):
 
     def read_place(self, speed: FloatArray) -> tuple[IntArray, FloatArray]: ...
 
+    def columns_at(self, keys: IntArray) -> dict[str, Any]: ...
+
     def read_xy(self) -> tuple[FloatArray, FloatArray]: ...
 
     def read_odometer(self) -> FloatArray: ...
@@ -77,6 +79,16 @@ class cached_property(Generic[T]):  # named as functools'
             return self
         value = obj.__dict__[self.name] = self.func(obj)
         return value
+
+
+def _take_fields(fields: dict[str, Any], values: dict[str, Any]) -> None:
+    """Add ``values`` (by field name) to an instance's ``fields``, where it has none yet
+    (a value assigned before, e.g. by a test hook, stays)."""
+    if fields.keys().isdisjoint(values):
+        fields.update(values)
+    else:
+        for name, value in values.items():
+            fields.setdefault(name, value)
 
 
 @dataclass(eq=False)
@@ -166,8 +178,17 @@ class OpenState:
     # ------------------------------------------------------------------ where each car is
     @cached_property
     def place(self) -> tuple[IntArray, FloatArray]:
-        """Every car's lane (a lane-table key) and position on it, m (read from SUMO)."""
-        return self.reader.read_place(self.speed)
+        """Every car's lane (a lane-table key) and position on it, m (read from SUMO).
+
+        The lane table's columns at these keys that an earlier step already looked up (the
+        reader hands out the same keys array while no car changed lanes) become this
+        step's fields at once; a field this step already has keeps its value."""
+        place = self.reader.read_place(self.speed)
+        fields = self.__dict__
+        fields.setdefault("lane_key", place[0])
+        fields.setdefault("lane_pos", place[1])
+        _take_fields(fields, self.reader.columns_at(place[0]))
+        return place
 
     @cached_property
     def lane_key(self) -> IntArray:
@@ -179,30 +200,51 @@ class OpenState:
         """Position of every car on its lane, m."""
         return self.place[1]
 
+    def _column(self, name: str, values: np.ndarray) -> Any:
+        """``values`` (a lane-table column) at every car's lane key, kept by the reader for
+        the next steps with the same keys (read-only: those steps hand out the same array)."""
+        keys = self.lane_key
+        column = values[keys]
+        column.flags.writeable = False
+        self.reader.columns_at(keys)[name] = column
+        return column
+
     @cached_property
     def lanes(self) -> IntArray:
         """Lane index of every car."""
-        return self.reader.lanes.lane_index[self.lane_key]
+        return self._column("lanes", self.reader.lanes.lane_index)
+
+    @cached_property
+    def _lane_start(self) -> FloatArray:
+        """The start of every car's edge along the network, m."""
+        return self._column("_lane_start", self.reader.lanes.start)
 
     @cached_property
     def position(self) -> FloatArray:
         """Position along the network (its edge's start plus the lane position), m."""
-        return self.reader.lanes.start[self.lane_key] + self.lane_pos
+        return self._lane_start + self.lane_pos
 
     @cached_property
     def speed_limit(self) -> FloatArray:
         """The speed limit of every car's lane, m/s."""
-        return self.reader.lanes.speed_limit[self.lane_key]
+        return self._column("speed_limit", self.reader.lanes.speed_limit)
 
     @cached_property
     def on_internal(self) -> BoolArray:
         """Whether each car is on a junction-internal lane."""
-        return self.reader.lanes.internal[self.lane_key]
+        return self._column("on_internal", self.reader.lanes.internal)
+
+    @cached_property
+    def _any_internal(self) -> bool:
+        """Whether any car is on a junction-internal lane."""
+        anyone = bool(np.count_nonzero(self.on_internal))
+        self.reader.columns_at(self.lane_key)["_any_internal"] = anyone
+        return anyone
 
     @cached_property
     def edge_index(self) -> IntArray:
         """Every car's edge as an index into the lane table's ``edge_names``."""
-        return self.reader.lanes.edge_index[self.lane_key]
+        return self._column("edge_index", self.reader.lanes.edge_index)
 
     @cached_property
     def edges(self) -> list[str]:
@@ -233,8 +275,11 @@ class OpenState:
     # ------------------------------------------------------------------ who follows whom
     @cached_property
     def neighbours(self) -> Neighbours:
-        """Who follows whom, within lanes and across junctions (found when first asked)."""
-        return self.reader.following(self.speed, self.lane_key, self.lane_pos)
+        """Who follows whom, within lanes and across junctions (found when first asked);
+        its fields become this step's at once (a field the step already has keeps its value)."""
+        found = self.reader.following(self.speed, self.lane_key, self.lane_pos)
+        _take_fields(self.__dict__, found.__dict__)
+        return found
 
     @cached_property
     def leader(self) -> IntArray:
@@ -280,10 +325,9 @@ class OpenState:
     def commandable(self, acc: FloatArray, idx: Any) -> FloatArray:
         """``acc`` as commanded to the cars ``idx``: as in Flow, a car on a junction-internal
         lane is left to SUMO for that step (no command, NaN)."""
-        internal = self.on_internal
-        if not np.count_nonzero(internal):  # (most steps: nobody on a junction)
+        if not self._any_internal:  # (most steps: nobody on a junction)
             return acc
-        return np.where(internal[idx], np.nan, acc)
+        return np.where(self.on_internal[idx], np.nan, acc)
 
 
 VehicleState = RingState | OpenState

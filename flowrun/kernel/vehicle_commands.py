@@ -323,13 +323,15 @@ class VehicleCommands:
         formula of :meth:`send_commands` on Python floats (the same operations in the same
         order, so the same speeds, bit for bit; numpy's cost is mostly per call)."""
         cmd_l = cmd.tolist()
-        sent = [a - a == 0.0 for a in cmd_l]  # finite (NaN - NaN and inf - inf are NaN)
-        if True not in sent:
-            return
+        sent = None  # (a finite sum: every command is finite)
+        if not math.isfinite(sum(cmd_l)):
+            sent = [a - a == 0.0 for a in cmd_l]  # finite (NaN - NaN and inf - inf are NaN)
+            if True not in sent:
+                return
         state, dt = self.state, self.dt
         rows = zip(self.table.ids, cmd_l, state.speed.tolist(), state.speed_limit.tolist(),
                    strict=True)  # fmt: skip
-        for vid, a, v, limit in compress(rows, sent):
+        for vid, a, v, limit in rows if sent is None else compress(rows, sent):
             speed = v + a * dt
             speed = speed if speed > 0.0 else 0.0
             slow_down(vid, speed if speed < limit else limit, SLOW_DOWN_DURATION)

@@ -55,11 +55,13 @@ def from_first_rl(pos: np.ndarray, is_rl: np.ndarray, length: float) -> np.ndarr
     return from_entry(pos, int(rl[0]), length) if rl.size else pos
 
 
-def from_entry(pos: np.ndarray, i: int, length: float) -> np.ndarray:
-    """Positions measured forward from entry ``i``'s, modulo ``length``; entry ``i`` keeps
-    its own position."""
-    out = np.mod(pos - pos[i], length)
-    out[i] = pos[i]
+def from_entry(pos: np.ndarray, i: int, length: Any) -> np.ndarray:
+    """Positions measured forward from entry ``i``'s, modulo ``length`` (a float, or a 0-d
+    array: a ufunc converts a Python float at every call); entry ``i`` keeps its own
+    position."""
+    own = pos[i]
+    out = np.mod(pos - own, length)
+    out[i] = own
     return out
 
 
@@ -234,8 +236,8 @@ class AccelEnv(RingAccelBase):
         self._rl_cache: tuple[tuple[Any, int], IntArray] | None = None
         #: the observed cars' count (the initial vehicles'), found at the first observation
         self._num_observed: int | None = None
-        #: ((cars, max speed, length), the observation's divisors)
-        self._obs_scale: tuple[tuple[int, float, float], np.ndarray] | None = None
+        #: ((cars, max speed, length), the observation's divisors, the length as a 0-d array)
+        self._obs_scale: tuple[tuple[int, float, float], np.ndarray, np.ndarray] | None = None
         super().__init__(*args, **kwargs)
         self._from_rl = bool(self.env_params.additional_params.get("relative_positions"))
         self._sorting = bool(self.env_params.additional_params.get("sort_vehicles"))
@@ -340,13 +342,13 @@ class AccelEnv(RingAccelBase):
             speed, pos = speed[order], pos[order]
             if self._from_rl:
                 pos = from_first_rl(pos, vk.table.is_rl[order], self.k.network.length())
-        elif self._from_rl:  # (observed in row order: the first RL row, kept while the rows are)
-            rl = self._rl_rows()
-            pos = from_entry(pos, int(rl[0]), self.k.network.length()) if rl.size else pos
         # full_observation's divisions as one: each value over its own divisor
         scale = (n, self.k.network.max_speed(), self.k.network.length())
         if self._obs_scale is None or self._obs_scale[0] != scale:
-            self._obs_scale = (scale, np.repeat([scale[1], scale[2]], n))
+            self._obs_scale = (scale, np.repeat([scale[1], scale[2]], n), np.array(scale[2]))
+        if self._from_rl and not self._sorting:  # (in row order: the first RL row, kept)
+            rl = self._rl_rows()
+            pos = from_entry(pos, int(rl[0]), self._obs_scale[2]) if rl.size else pos
         return clip_unit(np.concatenate((fit(speed, n), fit(pos, n))) / self._obs_scale[1])
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
