@@ -132,6 +132,8 @@ class Env(EnvOutput, gymnasium.Env, metaclass=ABCMeta):
         self._needs_reset = True
         self._closed = False
         self._space_cache: tuple[gymnasium.Space[Any], gymnasium.Space[Any]] | None = None
+        #: the observation space's dtype and shape if it is a Box, else ``()``
+        self._obs_box: tuple[Any, ...] | None = None
         self._painter: EnvPainter | None = None
         self._placement: RingPlacement | None = None
         self._clipper: ActionClipper | None = None
@@ -358,10 +360,15 @@ class Env(EnvOutput, gymnasium.Env, metaclass=ABCMeta):
         return self._clipper.clip(self._spaces()[0], rl_actions)
 
     def _format_obs(self, obs: Any) -> Any:
-        space = self._spaces()[1]
-        if isinstance(space, gymnasium.spaces.Box):
-            obs = np.asarray(obs, dtype=space.dtype)
-            return obs if obs.shape == space.shape else obs.reshape(space.shape)
+        box = self._obs_box
+        if box is None:  # (the spaces are made once: their dtype and shape, kept)
+            space = self._spaces()[1]
+            box = self._obs_box = (
+                (space.dtype, space.shape) if isinstance(space, gymnasium.spaces.Box) else ()
+            )
+        if box:
+            obs = np.asarray(obs, dtype=box[0])
+            return obs if obs.shape == box[1] else obs.reshape(box[1])
         return obs
 
     def _info(self, crash: bool) -> dict[str, Any]:

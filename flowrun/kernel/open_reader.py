@@ -11,8 +11,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Sequence
-from itertools import chain, repeat
-from operator import add, mul
+from itertools import chain
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -34,18 +33,6 @@ _flatten = chain.from_iterable
 NO_ROWS = np.zeros(0, dtype=np.int64)
 NO_ROWS.flags.writeable = False
 NEVER = -(10**18)  # a clock no step has
-
-
-def _moved_few(pos: list[float], prev: list[float], speed: list[float], keys: list[int],
-               dt: float, alone: list[bool]) -> list[int]:  # fmt: skip
-    """The rows whose position is not the last one plus ``speed * dt``, or whose lane
-    (``keys``) is not its edge's only one: :meth:`OpenReader.read_place`'s test on lists,
-    first on all of them at once (C-level loops; the same float operations)."""
-    if pos == list(map(add, prev, map(mul, speed, repeat(dt)))) and all(map(alone.__getitem__,
-                                                                             keys)):  # fmt: skip
-        return []
-    return [r for r, p, q, v, k in zip(range(len(pos)), pos, prev, speed, keys, strict=True)
-            if not (p == q + v * dt and alone[k])]  # fmt: skip
 
 
 class OpenReader:
@@ -167,7 +154,10 @@ class OpenReader:
                     prev_key.tolist(), self._prev_pos.tolist())  # fmt: skip
                 pos_l = list(map(fast.get_lane_position, ids))
                 pos = np.array(pos_l, np.float64)
-                moved = _moved_few(pos_l, prev_l, speed.tolist(), key_l, self.dt, lanes.alone_l)
+                dt, alone = self.dt, lanes.alone_l
+                moved = [r for r, p, q, v, k in zip(range(n), pos_l, prev_l, speed.tolist(),
+                                                    key_l, strict=True)
+                         if not (p == q + v * dt and alone[k])]  # fmt: skip
             else:
                 pos = np.fromiter(map(fast.get_lane_position, ids), np.float64, n)
                 same = (pos == self._prev_pos + speed * self.dt) & lanes.alone[prev_key]

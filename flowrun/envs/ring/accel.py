@@ -349,7 +349,9 @@ class AccelEnv(RingAccelBase):
         if self._from_rl and not self._sorting:  # (in row order: the first RL row, kept)
             rl = self._rl_rows()
             pos = from_entry(pos, int(rl[0]), self._obs_scale[2]) if rl.size else pos
-        return clip_unit(np.concatenate((fit(speed, n), fit(pos, n))) / self._obs_scale[1])
+        if speed.size != n:  # (cars came or went: cut or zero-padded)
+            speed, pos = fit(speed, n), fit(pos, n)
+        return clip_unit(np.concatenate((speed, pos)) / self._obs_scale[1])
 
     def compute_reward(self, rl_actions: Any, **kwargs: Any) -> float:
         """Desired-velocity reward (mean speed when ``env_params.evaluate``)."""
