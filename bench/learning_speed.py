@@ -5,7 +5,7 @@ Usage::
     .venv/bin/python bench/learning_speed.py [NAME ...] [--quick]
 
 Names: ``configs/benchmarks/NAME.yaml``; figureeight0, merge0, grid0 and bottleneck0 by
-default (1.5 to 3 min on a 2-core machine, depending on what else runs; ``--quick`` 1 to 2.5
+default (about 3 min on a 2-core machine, more when other work runs; ``--quick`` about 2
 min). Per benchmark, in one run:
 
 - **env step against SUMO alone** (``bench/env_vs_sumo.py``): a first env run logs every write
