@@ -24,7 +24,7 @@ from flowrun.config.params import VehicleParams, is_rl
 from flowrun.config.yamlio import Locations, parse_yaml
 from flowrun.errors import ConfigError
 from flowrun.experiment.benchmark import BENCHMARKS, Benchmark
-from flowrun.loading.loader import config_from_dict
+from flowrun.loading.loader import config_from_dict, read_config_text
 
 ALL_HUMAN = "all-human"
 BENCHMARK = "benchmark"
@@ -113,8 +113,8 @@ def _location(cfg: ExperimentConfig, path: tuple[str, ...]) -> str:
     """``file:line`` of ``path`` in the YAML file ``cfg`` was loaded from, else its source."""
     source = cfg.source or "<config>"
     try:
-        return parse_yaml(Path(source).read_text(encoding="utf-8"), source)[1].of(path)
-    except (OSError, ConfigError, yaml.YAMLError):
+        return parse_yaml(read_config_text(Path(source), source), source)[1].of(path)
+    except (ConfigError, yaml.YAMLError):
         return source
 
 
