@@ -61,6 +61,10 @@ class NumpyPredictor:
     def __init__(self, policy: Any) -> None:
         self.policy = policy
         self._net: Mlp | None = None
+        #: for one observation of the policy's shape (the workers' case): that shape, the
+        #: action bounds as floats and the action's dtype (``None``: no numpy copy, a
+        #: squashed output, or actions not a vector)
+        self._one: tuple[tuple[int, ...], list[tuple[float, float]], Any] | None = None
         self._refresh()
 
     def load_from_vector(self, vector: Any) -> None:
@@ -76,6 +80,13 @@ class NumpyPredictor:
         flat = isinstance(policy.features_extractor, torch_layers.FlattenExtractor)
         net = getattr(policy, "action_net", None)
         self._net = mlp_of(list(net)) if box and flat and net is not None else None
+        self._one = None
+        space = policy.action_space
+        if self._net is not None and not policy.squash_output and len(space.shape) == 1:
+            low = np.asarray(space.low, np.float64).tolist()
+            high = np.asarray(space.high, np.float64).tolist()
+            self._one = (policy.observation_space.shape, list(zip(low, high, strict=True)),
+                         space.dtype)  # fmt: skip
 
     def predict(
         self,
@@ -85,13 +96,21 @@ class NumpyPredictor:
         deterministic: bool = False,
     ) -> tuple[np.ndarray, Any]:
         """``BasePolicy.predict``: the action for one observation or a batch of them."""
-        if self._net is None or isinstance(observation, dict):
+        one, net = self._one, self._net
+        if one is not None and net is not None and isinstance(observation, np.ndarray) \
+                and observation.shape == one[0]:  # fmt: skip
+            # one observation: the same product as a batch of one, clipped on floats (the
+            # same values: numpy's cost is per call)
+            out = net(observation.reshape(1, -1)).tolist()[0]
+            return np.array([lo if a < lo else (hi if a > hi else a)
+                             for a, (lo, hi) in zip(out, one[1], strict=True)], one[2]), None
+        if net is None or isinstance(observation, dict):
             return self.policy.predict(
                 observation, state, episode_start, deterministic)
         space = self.policy.action_space
         obs = np.asarray(observation)
         batch = obs.reshape(-1, *self.policy.observation_space.shape)
-        actions = self._net(batch.reshape(batch.shape[0], -1))
+        actions = net(batch.reshape(batch.shape[0], -1))
         if self.policy.squash_output:  # tanh output scaled to the bounds (unscale_action)
             actions = space.low + 0.5 * (actions + 1.0) * (space.high - space.low)
         else:

@@ -18,6 +18,7 @@ that is exactly ``VecNormalize``.
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -85,16 +86,24 @@ class ObsStats:
 
     def update(self, obs: FloatArray) -> None:
         """Add one observation."""
+        # the counts as 0-d arrays: a ufunc converts a Python float operand at every call
+        count, total = np.array(self.count, np.float64), np.array(self.count + 1, np.float64)
         delta = obs - self.mean
-        total = self.count + 1
         self.mean = self.mean + delta / total
-        self.var = (self.var * self.count + np.square(delta) * self.count / total) / total
-        self.count = total
+        self.var = (self.var * count + np.square(delta) * count / total) / total
+        self.count = self.count + 1
 
     def normalize(self, obs: FloatArray) -> FloatArray:
         """``VecNormalize.normalize_obs`` of one observation (float32)."""
-        scaled = (obs - self.mean) / np.sqrt(self.var + self.epsilon)
-        return np.minimum(np.maximum(scaled, -self.clip), self.clip).astype(np.float32)
+        epsilon, low, high = _constants(self.epsilon, self.clip)
+        scaled = (obs - self.mean) / np.sqrt(self.var + epsilon)
+        return np.minimum(np.maximum(scaled, low), high).astype(np.float32)
+
+
+@functools.lru_cache(maxsize=8)
+def _constants(epsilon: float, clip: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``epsilon``, ``-clip`` and ``clip`` as 0-d float64 arrays (the same values)."""
+    return np.array(float(epsilon)), np.array(-float(clip)), np.array(float(clip))
 
 
 @dataclass
