@@ -18,6 +18,9 @@ Modes:
          seeded random actions (drawn before the steps, as many at every run), and SUMO
          alone replaying every command the env sent (run ``bench/step_instructions.py
          eight_record STEPS`` first, as ``step_instructions.sh`` does).
+    eight_ars  one of figureeight0's ARS candidates as a ``flowrun train`` worker plays it
+         (``LeanAsyncEval``: the env, the policy's action, the observation statistics), one
+         episode of STEPS steps, its weights the recipe's first update's first candidate.
     grid, grid_raw  Flow's grid0 benchmark (3x3 lights, 300 veh/h per entering edge):
          ``TrafficLightGridBenchmarkEnv`` with seeded random switch actions, and SUMO alone
          replaying the env's signal states and car modes (``bench/grid_steps.py``; run
@@ -29,6 +32,8 @@ from __future__ import annotations
 import sys
 import tempfile
 from pathlib import Path
+
+import numpy as np
 
 from flowrun.envs.factory import make_env
 from flowrun.experiment.runner import Experiment
@@ -68,6 +73,26 @@ def figure_eight(mode: str, steps: int) -> None:
     env.close()
 
 
+def ars_worker(steps: int) -> None:
+    """One ARS candidate of figureeight0 played by a worker, an episode of ``steps`` steps."""
+    import torch
+    from sb3_contrib import ARS
+
+    from flowrun.training.ars import WorkerEnv
+    from flowrun.training.numpy_predict import _Candidates
+    from flowrun.training.vecenv import EnvFactory
+
+    cfg = load_config(CONFIGS / "benchmarks" / "figureeight0.yaml", [f"env.horizon={steps}"])
+    env = make_env(cfg)
+    model = ARS("LinearPolicy", env, policy_kwargs={"with_bias": True}, seed=0, device="cpu")
+    env.close()
+    worker = _Candidates(WorkerEnv(EnvFactory(cfg), 0, True), model.policy, 1)
+    theta = model.policy.parameters_to_vector()
+    noise = np.random.default_rng(0).standard_normal(theta.size)
+    worker.play(torch.as_tensor(theta + 0.02 * noise, dtype=torch.float32))
+    worker.env.close()
+
+
 def main() -> None:
     mode, steps = sys.argv[1], int(sys.argv[2])
     scale = int(sys.argv[3]) if len(sys.argv) > 3 else 1
@@ -89,6 +114,9 @@ def main() -> None:
                 api.vehicle.setSpeedMode(vid, speed_mode)
                 api.vehicle.setLaneChangeMode(vid, lane_change_mode)
         env.close()
+        return
+    if mode == "eight_ars":
+        ars_worker(steps)
         return
     if mode.startswith("eight"):
         figure_eight(mode, steps)

@@ -8,6 +8,8 @@
 # Flow's grid0 and its floor: MODES="grid_raw grid" STEPS="300 600" bash bench/step_instructions.sh
 # Flow's figureeight0 and SUMO alone replaying its commands:
 #   MODES="eight_raw eight" STEPS="300 1300" bash bench/step_instructions.sh
+# An ARS worker of figureeight0 playing one candidate (env, policy, observation statistics):
+#   MODES="eight_ars" STEPS="300 1300" bash bench/step_instructions.sh
 #
 # Each mode runs twice (500 and 2,500 steps); the difference / 2,000 is the cost of one step,
 # start-up cancelled out. The count is repeatable to the instruction only with: one BLAS
@@ -31,7 +33,7 @@ case " ${MODES:-} " in *" eight_raw "*)
   "$PY" bench/step_instructions.py eight_record "$LONG" ;; esac
 per_raw=0 per_exp=0 per_rec=0 per_merge_raw=0 per_merge=0 per_grid_raw=0 per_grid=0
 per_eight_raw=0 per_eight=0
-for mode in ${MODES:-raw exp rec}; do  # raw exp rec merge_raw merge grid_raw grid eight_raw eight
+for mode in ${MODES:-raw exp rec}; do  # raw exp rec merge_raw merge grid_raw grid eight_raw eight eight_ars
   a=$(count "$mode" "$SHORT"); b=$(count "$mode" "$LONG")
   per=$(( (b - a) / (LONG - SHORT) ))
   echo "$mode: $per instructions/step"
