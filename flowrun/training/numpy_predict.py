@@ -65,8 +65,6 @@ class NumpyPredictor:
         #: action bounds as floats and the action's dtype (``None``: no numpy copy, a
         #: squashed output, or actions not a vector)
         self._one: tuple[tuple[int, ...], list[tuple[float, float]], Any] | None = None
-        #: a linear policy's (one layer, no activation) weights and biases as floats
-        self._linear: tuple[np.ndarray, list[float]] | None = None
         self._refresh()
 
     def load_from_vector(self, vector: Any) -> None:
@@ -82,9 +80,7 @@ class NumpyPredictor:
         flat = isinstance(policy.features_extractor, torch_layers.FlattenExtractor)
         net = getattr(policy, "action_net", None)
         self._net = mlp_of(list(net)) if box and flat and net is not None else None
-        self._one = self._linear = None
-        if self._net is not None and self._net.activations == ("",):
-            self._linear = (self._net.weights[0], self._net.biases[0].tolist())
+        self._one = None
         space = policy.action_space
         if self._net is not None and not policy.squash_output and len(space.shape) == 1:
             low = np.asarray(space.low, np.float64).tolist()
@@ -103,14 +99,9 @@ class NumpyPredictor:
         one, net = self._one, self._net
         if one is not None and net is not None and isinstance(observation, np.ndarray) \
                 and observation.shape == one[0]:  # fmt: skip
-            # one observation: the same product as a batch of one, the bias added and the
-            # result clipped on floats (the same values: numpy's cost is per call)
-            linear, row = self._linear, observation.reshape(1, -1)
-            if linear is None:
-                out = net(row).tolist()[0]
-            else:  # (the float64 product Mlp computes)
-                out = (np.asarray(row, np.float64) @ linear[0]).tolist()[0]
-                out = [a + b for a, b in zip(out, linear[1], strict=True)]
+            # one observation: the same product as a batch of one, clipped on floats (the
+            # same values: numpy's cost is per call)
+            out = net(observation.reshape(1, -1)).tolist()[0]
             return np.array([lo if a < lo else (hi if a > hi else a)
                              for a, (lo, hi) in zip(out, one[1], strict=True)], one[2]), None
         if net is None or isinstance(observation, dict):
