@@ -18,7 +18,6 @@ that is exactly ``VecNormalize``.
 
 from __future__ import annotations
 
-import functools
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -83,6 +82,13 @@ class ObsStats:
     count: float
     clip: float
     epsilon: float
+    #: ``epsilon``, ``-clip`` and ``clip`` as 0-d arrays (a ufunc converts a Python float
+    #: operand at every call)
+    _bounds: tuple[FloatArray, FloatArray, FloatArray] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self._bounds = (np.array(float(self.epsilon)), np.array(-float(self.clip)),
+                        np.array(float(self.clip)))  # fmt: skip
 
     def update(self, obs: FloatArray) -> None:
         """Add one observation."""
@@ -95,15 +101,9 @@ class ObsStats:
 
     def normalize(self, obs: FloatArray) -> FloatArray:
         """``VecNormalize.normalize_obs`` of one observation (float32)."""
-        epsilon, low, high = _constants(self.epsilon, self.clip)
+        epsilon, low, high = self._bounds
         scaled = (obs - self.mean) / np.sqrt(self.var + epsilon)
         return np.minimum(np.maximum(scaled, low), high).astype(np.float32)
-
-
-@functools.lru_cache(maxsize=8)
-def _constants(epsilon: float, clip: float) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``epsilon``, ``-clip`` and ``clip`` as 0-d float64 arrays (the same values)."""
-    return np.array(float(epsilon)), np.array(-float(clip)), np.array(float(clip))
 
 
 @dataclass
