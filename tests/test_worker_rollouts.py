@@ -147,6 +147,14 @@ def test_ars_candidates_act_with_numpy_as_the_torch_policy(kind: str) -> None:
         assert np.abs(expected).max() > 0.1  # not all clipped to zero
         single, _ = predictor.predict(obs[0])
         np.testing.assert_allclose(single, expected[0], atol=1e-5)
+        # one observation gives the batch's row bit for bit (its own path for speed)
+        assert single.dtype == actions.dtype
+        np.testing.assert_array_equal(single, actions[0])
+        wide = obs[1] * 1e3  # far outside the bounds: clipped as the batch clips
+        clipped, _ = predictor.predict(wide)
+        np.testing.assert_array_equal(clipped, predictor.predict(wide[None])[0][0])
+        space = model.policy.action_space
+        assert np.all((clipped == space.low) | (clipped == space.high))
     finally:
         venv.close()
 
