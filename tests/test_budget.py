@@ -19,6 +19,7 @@ from flowrun.experiment.benchmark_results import make_record, markdown_table
 from flowrun.experiment.benchmark_run import BenchmarkPlan, train_command
 from flowrun.loading.loader import load_config
 from flowrun.preflight.budget import (
+    OFF_POLICY_EFFICIENCY,
     STARTUP_S,
     TRAINING_EFFICIENCY,
     Workload,
@@ -46,17 +47,22 @@ def _set(items: list[str]) -> list[str]:
 
 
 def test_estimate_divides_training_by_rate_cores_and_efficiency() -> None:
-    work = Workload("x", runs=3, n_envs=2, train_steps=3_000_000, eval_steps=100_000,
+    work = Workload("x", "PPO", runs=3, n_envs=2, train_steps=3_000_000, eval_steps=100_000,
                     after_steps=50_000)  # fmt: skip
     est = estimate(work, step_rate=2_000.0, cores=2)
     assert est.cores_used == 2  # 6 env processes wanted, 2 cores
-    assert est.train_s == pytest.approx(3_000_000 / (2_000 * 2 * TRAINING_EFFICIENCY))  # 1500
+    assert TRAINING_EFFICIENCY == 0.65
+    assert est.train_s == pytest.approx(3_000_000 / (2_000 * 2 * 0.65))  # 1153.8 s
     assert est.eval_s == pytest.approx(100_000 / (2_000 * 2))  # 3 runs, 2 at once: 25 s
     assert est.after_s == pytest.approx(50_000 / 4_000)
     assert est.startup_s == 2 * STARTUP_S  # 3 runs, 2 at a time: two rounds
-    assert est.seconds == pytest.approx(1500 + 25 + 12.5 + 40)
+    assert est.seconds == pytest.approx(3_000_000 / 2_600 + 25 + 12.5 + 40)
     one = estimate(replace(work, runs=1, n_envs=1), 2_000.0, cores=8)
-    assert one.cores_used == 1 and one.train_s == pytest.approx(3_000.0)
+    assert one.cores_used == 1 and one.train_s == pytest.approx(3_000_000 / 1_300)
+    # off-policy algorithms step through SB3's own loop, an update every few steps: slower
+    sac = estimate(replace(work, algorithm="SAC"), 2_000.0, cores=2)
+    assert OFF_POLICY_EFFICIENCY < TRAINING_EFFICIENCY
+    assert sac.train_s == pytest.approx(3_000_000 / (2_000 * 2 * OFF_POLICY_EFFICIENCY))
     with pytest.raises(ValueError):
         estimate(work, 0.0, 2)
 
@@ -64,7 +70,7 @@ def test_estimate_divides_training_by_rate_cores_and_efficiency() -> None:
 def test_workload_counts_the_evaluation_episodes() -> None:
     cfg = load_config(FIGURE_EIGHT, RECIPE_1M)
     work = workload(cfg, runs=3, benchmark=True)
-    assert work.train_steps == 3_000_000 and work.n_envs == 2
+    assert work.train_steps == 3_000_000 and work.n_envs == 2 and work.algorithm == "ARS"
     periodic = 3 * (1 + 1_000_000 // 96_000) * 2 * 1500  # the all-human reference, then 10
     assert work.eval_steps == periodic + 5 * 1500  # + the baselines on 5 evaluation seeds
     assert work.after_steps == 3 * 2 * 2 * 1500 + 3 * 2 * 5 * 1500  # final + flowrun eval
@@ -82,18 +88,18 @@ def test_plan_refuses_an_estimate_over_the_budget_and_says_how_to_fit() -> None:
     def probe(_: object) -> float:
         return 5_000.0
 
-    # training 1M / (5000 x 2 x 0.5) = 200 s; evaluations (1 + 10 periodic) x 2 x 1500 = 33k
-    # steps = 6.6 s, the final one 2 x 2 x 1500 = 1.2 s; start-up 20 s: 227.8 s in all
+    # training 1M / (5000 x 2 x 0.65) = 153.8 s; evaluations (1 + 10 periodic) x 2 x 1500 =
+    # 33k steps = 6.6 s, the final one 2 x 2 x 1500 = 1.2 s; start-up 20 s: 181.7 s in all
     est = estimate(work, 5_000.0, 2)
-    assert est.seconds == pytest.approx(227.8)
+    assert est.seconds == pytest.approx(1_000_000 / 6_500 + 27.8)
     with pytest.raises(FlowrunError) as err:
         plan_budget([(cfg, work)], minutes=2.0, cores=2, probe=probe)
     text = str(err.value)
-    assert text.startswith("estimated 3.8 min, over the --budget of 2 min (figureeight0: ")
-    assert "1M training steps at 5,000 env steps/s x 2 core(s) x 0.5 = 3.3 min" in text
-    assert "300-step probe of one env" in text
-    # 2 min leave 92.2 s for training: 461k steps, rounded down to two digits
-    assert text.endswith("to fit: --set train.total_timesteps=460000 or --budget 4")
+    assert text.startswith("estimated 3.0 min, over the --budget of 2 min (figureeight0: ")
+    assert "1M training steps at 5,000 env steps/s x 2 core(s) x 0.65 (ARS) = 2.6 min" in text
+    assert "env steps/s from one episode of one env (at most 3,000 steps)" in text
+    # 2 min leave 92.2 s for training: 599k steps, rounded down to two digits
+    assert text.endswith("to fit: --set train.total_timesteps=590000 or --budget 4")
     fits = plan_budget([(cfg, work)], minutes=10.0, cores=2, probe=probe, now=1_000.0)
     assert fits.deadline == pytest.approx(1_000.0 + 600 - est.after_s)
     assert "of the 10 min budget" in fits.describe()

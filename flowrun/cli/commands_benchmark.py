@@ -183,7 +183,7 @@ def benchmark(
             "--budget",
             metavar="MINUTES",
             help="With --train: the wall time the whole command may take. Before anything "
-            "runs, an estimate (a 300-step probe of each benchmark's env, times the cores "
+            "runs, an estimate (one episode of each benchmark's env, times the cores "
             "training uses and the share of it training reaches, plus the baselines and "
             "evaluation episodes) refuses what would not fit and says how to fit it; an "
             "estimate, not a promise, so every training also stops when the time is up (less "
@@ -225,12 +225,11 @@ def benchmark(
 def _within_budget(plan: BenchmarkPlan, minutes: float) -> BenchmarkPlan:
     """Refuse a plan whose estimate exceeds the budget; else say the estimate and give the
     trainings its deadline."""
-    from flowrun.preflight.budget import PROBE_STEPS, benchmark_budget
+    from flowrun.preflight.budget import PROBE_TEXT, benchmark_budget
 
     if not plan.train:
         raise ConfigError("--budget limits the trainings of --train; add --train or drop it")
-    console.print(f"estimating the wall time: a {PROBE_STEPS}-step probe of each benchmark's "
-                  "env", highlight=False)  # fmt: skip
+    console.print(f"estimating the wall time: {PROBE_TEXT}, per benchmark", highlight=False)
     paths = [bench.config_path(plan.configs) for bench in plan.benchmarks]
     fits = benchmark_budget(paths, plan.sets, len(plan.seeds), minutes)
     console.print(fits.describe(), highlight=False, markup=False)

@@ -45,8 +45,8 @@ BudgetOpt = Annotated[
     typer.Option(
         "--budget",
         metavar="MINUTES",
-        help="Wall time the training may take. Before it starts, an estimate (a 300-step "
-        "probe of one env's speed, times the cores training uses and the share of it "
+        help="Wall time the training may take. Before it starts, an estimate (one "
+        "episode of one env for its speed, times the cores training uses and the share of it "
         "training reaches, plus the evaluation episodes) refuses a recipe that would not "
         "fit and says how to fit it; an estimate, not a promise, so training also stops "
         "when the time is up (a complete run with fewer steps; metrics.json says "
@@ -117,7 +117,7 @@ def train(
     best model. Ctrl-C or SIGTERM saves a checkpoint and exits with 130 / 143.
     --budget MINUTES estimates the wall time first and refuses what would not fit.
     """
-    from flowrun.preflight.budget import PROBE_STEPS, parse_deadline, train_budget
+    from flowrun.preflight.budget import PROBE_TEXT, parse_deadline, train_budget
     from flowrun.preflight.prepare import prepare_training
 
     overrides = overrides_with_seed(set_, seed)
@@ -129,7 +129,7 @@ def train(
         feedback.phase(note)
     stop_at = parse_deadline(deadline) if deadline is not None else None
     if budget is not None:
-        feedback.phase(f"estimating the wall time: a {PROBE_STEPS}-step probe of one env")
+        feedback.phase(f"estimating the wall time: {PROBE_TEXT}")
         fits = train_budget(plan.cfg, budget, resume)
         feedback.phase(fits.describe())
         stop_at = fits.deadline

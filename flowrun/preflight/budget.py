@@ -1,11 +1,12 @@
 """``--budget MINUTES``: will a training recipe fit the wall time the user gave? Asked up front.
 
 The estimate is arithmetic on a measurement, and says so. The measurement
-(:func:`probe_step_rate`) times :data:`PROBE_STEPS` steps of one environment of the config
-from the middle of an episode, in this process, no learning. The arithmetic
+(:func:`probe_step_rate`) times one episode of one environment of the config (its reset and at
+most :data:`PROBE_STEPS` steps), in this process, no learning: the rate the training's
+efficiency was measured against. The arithmetic
 (:func:`estimate`, a pure function) divides the training steps by that rate times the cores
-training can use (``n_envs`` env processes per run, capped by the cores) times
-:data:`TRAINING_EFFICIENCY`, and adds the evaluation
+training can use (``n_envs`` env processes per run, capped by the cores) times the
+algorithm's share of it (:func:`training_efficiency`), and adds the evaluation
 episodes at the probe's rate and a start-up time per run.
 
 :func:`plan_budget` refuses a recipe whose estimate exceeds the budget, with how to fit it,
@@ -25,14 +26,21 @@ from pathlib import Path
 
 from flowrun.config.model import ExperimentConfig
 from flowrun.errors import ConfigError, FlowrunError
+from flowrun.training.algorithms import OFF_POLICY
 
-#: Env steps the probe times, from the middle of an episode.
-PROBE_STEPS = 300
-#: Most steps the probe runs untimed first (half the horizon, up to this).
-PROBE_SKIP = 1000
-#: Training's env steps/s over (cores used x one env's rate): the four benchmarks measured
-#: 0.39-0.80 of it on 2 cores (bench/train_throughput.py, docs/training.md).
-TRAINING_EFFICIENCY = 0.5
+#: Most env steps the probe times (one episode from its reset, up to this).
+PROBE_STEPS = 3000
+#: What the CLI says while the probe runs.
+PROBE_TEXT = f"one episode of one env (at most {PROBE_STEPS:,} steps)"
+#: Training's env steps/s over (cores used x one env's rate over whole episodes) when the env
+#: processes step whole rollouts (ARS's candidates; PPO, TRPO and A2C with an MLP policy): the
+#: four benchmarks' recipes measured 0.64-0.79 of it on 2 cores (bench/learning_speed.py,
+#: bench/train_throughput.py; docs/training.md).
+TRAINING_EFFICIENCY = 0.65
+#: The same for off-policy algorithms (SAC, TD3, DDPG), which step through SB3's own loop with
+#: a gradient step after every env step: merge0 with SAC's and TD3's defaults measured 0.05
+#: and 0.07 (bench/train_throughput.py; 1.7-2.7 ms of updates per env step).
+OFF_POLICY_EFFICIENCY = 0.05
 #: Seconds a training run spends starting (network, env processes, model) and finishing.
 STARTUP_S = 20.0
 #: Episodes of each rollout of ``flowrun benchmark --train``'s policy evaluation.
@@ -45,6 +53,7 @@ class Workload:
 
     Attributes:
         name: the config's name.
+        algorithm: ``train.algorithm``.
         runs: training runs (seeds).
         n_envs: env processes of one run.
         train_steps: training steps, all runs.
@@ -55,6 +64,7 @@ class Workload:
     """
 
     name: str
+    algorithm: str
     runs: int
     n_envs: int
     train_steps: int
@@ -98,7 +108,8 @@ class Estimate:
         return (
             f"{w.name}: {w.runs} run(s), {_steps(w.train_steps)} training steps at "
             f"{self.step_rate:,.0f} env steps/s x {self.cores_used} core(s) x "
-            f"{TRAINING_EFFICIENCY} = {_minutes(self.train_s)}, {_steps(evals)} evaluation "
+            f"{training_efficiency(w.algorithm)} ({w.algorithm}) = {_minutes(self.train_s)}, "
+            f"{_steps(evals)} evaluation "
             f"steps = {_minutes(self.eval_s + self.after_s)}, start-up "
             f"{_minutes(self.startup_s)}"
         )
@@ -107,7 +118,7 @@ class Estimate:
 def estimate(work: Workload, step_rate: float, cores: int) -> Estimate:
     """The wall time of ``work`` at ``step_rate`` env steps/s per env on ``cores`` cores.
 
-    Training runs on ``min(cores, n_envs * runs)`` cores at :data:`TRAINING_EFFICIENCY` of the
+    Training runs on ``min(cores, n_envs * runs)`` cores at :func:`training_efficiency` of the
     env's rate each; evaluation episodes run at the env's rate, ``min(cores, runs)`` at once;
     each run adds :data:`STARTUP_S`, ``min(cores, runs)`` at once.
     """
@@ -120,11 +131,16 @@ def estimate(work: Workload, step_rate: float, cores: int) -> Estimate:
         step_rate=step_rate,
         cores=cores,
         cores_used=used,
-        train_s=work.train_steps / (step_rate * used * TRAINING_EFFICIENCY),
+        train_s=work.train_steps / (step_rate * used * training_efficiency(work.algorithm)),
         eval_s=work.eval_steps / (step_rate * parallel),
         after_s=work.after_steps / (step_rate * parallel),
         startup_s=STARTUP_S * math.ceil(work.runs / parallel),
     )
+
+
+def training_efficiency(algorithm: str) -> float:
+    """Training's env steps/s over (cores used x one env's rate) for ``algorithm``."""
+    return OFF_POLICY_EFFICIENCY if algorithm in OFF_POLICY else TRAINING_EFFICIENCY
 
 
 def workload(cfg: ExperimentConfig, runs: int, benchmark: bool, done: int = 0) -> Workload:
@@ -144,32 +160,35 @@ def workload(cfg: ExperimentConfig, runs: int, benchmark: bool, done: int = 0) -
     if benchmark:
         during += BENCHMARK_EPISODES * episode  # the baselines on the evaluation seeds
         after += runs * 2 * BENCHMARK_EPISODES * episode  # flowrun eval: policy and all-human
-    return Workload(cfg.name or "config", runs, tc.n_envs, runs * left, during, after)
+    return Workload(cfg.name or "config", tc.algorithm, runs, tc.n_envs, runs * left, during,
+                    after)
 
 
 def probe_step_rate(cfg: ExperimentConfig, steps: int = PROBE_STEPS) -> float:
-    """One env's steps/s: ``steps`` steps with zero actions from the middle of an episode
-    (the reset and the steps before, at most :data:`PROBE_SKIP` of them, are not timed: an
-    open network fills with cars as its episode goes on)."""
+    """One env's steps/s over one episode with zero actions, its reset included (as training
+    resets after every episode; an open network fills with cars as the episode goes on), and at
+    most ``steps`` steps of it (the first ``steps`` of a longer or endless episode). The env's
+    first reset (building the network, starting SUMO) comes before and is not timed."""
     import numpy as np
 
     from flowrun.envs.factory import make_env
 
     horizon = cfg.env.horizon
-    skip = min(PROBE_SKIP, int(horizon) // 2) if math.isfinite(horizon) else 0
+    count = min(steps, int(horizon)) if math.isfinite(horizon) else steps
     env = make_env(cfg)
     try:
-        env.reset(seed=0)
         space = env.action_space
         action = np.zeros(tuple(space.shape or ()), dtype=np.dtype(space.dtype or float))
-        elapsed = 0.0
-        for step in range(skip + steps):
-            start = time.perf_counter()
+        env.reset(seed=0)  # the first reset builds the network and starts SUMO: not timed
+        start = time.perf_counter()
+        env.reset()
+        done = 0
+        while done < count:
             _, _, terminated, truncated, _ = env.step(action)
-            elapsed += time.perf_counter() - start if step >= skip else 0.0
+            done += 1
             if terminated or truncated:
-                env.reset()
-        return steps / max(elapsed, 1e-9)
+                break
+        return done / max(time.perf_counter() - start, 1e-9)
     finally:
         env.close()
 
@@ -296,7 +315,7 @@ def machine_cores() -> int:
 def _how(estimates: Sequence[Estimate]) -> str:
     parts = "; ".join(e.describe() for e in estimates)
     return (
-        f"{parts}; env steps/s from a {PROBE_STEPS}-step probe of one env, "
+        f"{parts}; env steps/s from {PROBE_TEXT}, "
         f"{estimates[0].cores} core(s) here{_load()}"
     )
 
