@@ -59,7 +59,7 @@ def test_estimate_divides_training_by_rate_cores_and_efficiency() -> None:
     assert est.seconds == pytest.approx(3_000_000 / 2_600 + 25 + 12.5 + 40)
     one = estimate(replace(work, runs=1, n_envs=1), 2_000.0, cores=8)
     assert one.cores_used == 1 and one.train_s == pytest.approx(3_000_000 / 1_300)
-    # off-policy algorithms step through SB3's own loop, an update every few steps: slower
+    # off-policy algorithms step through SB3's own loop, a gradient step after every step
     sac = estimate(replace(work, algorithm="SAC"), 2_000.0, cores=2)
     assert OFF_POLICY_EFFICIENCY < TRAINING_EFFICIENCY
     assert sac.train_s == pytest.approx(3_000_000 / (2_000 * 2 * OFF_POLICY_EFFICIENCY))
